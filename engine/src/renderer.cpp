@@ -1,0 +1,597 @@
+// GpuRenderer: model rendering to colour, linear metric depth and normals with Vulkan.
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "context.hpp"
+#include "render_layout.h"
+#include "shader_registry.hpp"
+#include "vkloc/gpu.hpp"
+
+namespace vkloc {
+
+using engine::Buffer;
+using engine::DeviceHandle;
+
+static_assert(sizeof(engine::ModelPush) == 112, "ModelPush must match the GLSL std430 push block");
+static_assert(offsetof(engine::ModelPush, intrinsics) == 64);
+static_assert(offsetof(engine::ModelPush, base_color) == 80);
+static_assert(offsetof(engine::ModelPush, texture) == 96);
+
+namespace {
+
+constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
+constexpr VkFormat kLinearDepthFormat = VK_FORMAT_R32_SFLOAT;
+constexpr VkFormat kNormalFormat = VK_FORMAT_R16G16_SFLOAT;  // octahedral
+constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;      // reverse-Z
+
+// Interleaved per-vertex attributes of binding 1 (binding 0 holds positions alone, so
+// depth-only passes can skip these).
+struct VertexAttributes {
+  float uv[2];
+  uint8_t rgba[4];
+};
+static_assert(sizeof(VertexAttributes) == 12);
+
+float halfToFloat(uint16_t h) {
+  const uint32_t sign = (h >> 15) & 1u, exp = (h >> 10) & 0x1fu, mant = h & 0x3ffu;
+  float v;
+  if (exp == 0) v = std::ldexp(static_cast<float>(mant), -24);
+  else if (exp == 31) v = mant ? NAN : INFINITY;
+  else v = std::ldexp(static_cast<float>(mant | 0x400u), static_cast<int>(exp) - 25);
+  return sign ? -v : v;
+}
+
+// Inverse of octEncode in shaders/include/octahedral.glsl.
+void octDecode(float ex, float ey, float out[3]) {
+  float x = ex, y = ey, z = 1.0f - std::abs(ex) - std::abs(ey);
+  if (z < 0.0f) {
+    x = (1.0f - std::abs(ey)) * (ex >= 0.0f ? 1.0f : -1.0f);
+    y = (1.0f - std::abs(ex)) * (ey >= 0.0f ? 1.0f : -1.0f);
+  }
+  const float n = std::sqrt(x * x + y * y + z * z);
+  out[0] = x / n;
+  out[1] = y / n;
+  out[2] = z / n;
+}
+
+Result<DeviceHandle<VkShaderModule>> shaderModule(VkDevice device, const char* name) {
+  const engine::ShaderBlob* blob = engine::findShader(name);
+  if (blob == nullptr) return makeError(ErrorCode::kGpuError, fmt::format("shader {} is not embedded", name));
+  VkShaderModuleCreateInfo ci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+  ci.codeSize = blob->word_count * 4;
+  ci.pCode = blob->words;
+  VkShaderModule module = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateShaderModule(device, &ci, nullptr, &module));
+  return DeviceHandle<VkShaderModule>(device, module, vkDestroyShaderModule);
+}
+
+// Render targets for one image size.
+struct Targets {
+  uint32_t width = 0, height = 0;
+  engine::Image color, linear_depth, normals, depth;
+  DeviceHandle<VkFramebuffer> framebuffer[2];  // [with normals]
+  Buffer readback;  // rgba8 | float depth | rg16f normals
+};
+
+}  // namespace
+
+struct GpuRenderer::Impl {
+  std::shared_ptr<GpuContext> context;
+  GpuContext::Impl* ctx = nullptr;
+  VkDevice device = VK_NULL_HANDLE;
+
+  // Model data.
+  std::vector<DrawRange> ranges;
+  std::vector<Block> blocks;
+  std::vector<Material> materials;
+  std::vector<bool> texture_ok;
+  std::array<double, 3> origin{0, 0, 0};  // world frame, metres; vertices are stored relative to it
+  Buffer positions, attributes, indices;
+  std::vector<engine::Image> textures;
+  DeviceHandle<VkSampler> sampler;
+  DeviceHandle<VkDescriptorSetLayout> set_layout;
+  DeviceHandle<VkDescriptorPool> descriptor_pool;
+  VkDescriptorSet descriptor_set = VK_NULL_HANDLE;
+  DeviceHandle<VkPipelineLayout> pipeline_layout;
+  DeviceHandle<VkRenderPass> render_pass[2];  // [with normals]
+  DeviceHandle<VkShaderModule> vert, frag;
+  std::map<int, DeviceHandle<VkPipeline>> pipelines;  // key: normals | cull << 1
+  int texture_count = 1;
+
+  Targets targets;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  DeviceHandle<VkFence> fence;
+
+  ~Impl() {
+    if (device != VK_NULL_HANDLE) vkDeviceWaitIdle(device);
+    if (cmd != VK_NULL_HANDLE) vkFreeCommandBuffers(device, ctx->command_pool.get(), 1, &cmd);
+  }
+
+  Status init(const Model& model);
+  Status createRenderPasses();
+  Result<VkPipeline> pipeline(bool normals, bool cull);
+  Status ensureTargets(uint32_t width, uint32_t height);
+  Result<RenderOutput> render(const PinholeCamera& camera, const Pose& T_world_camera,
+                              const RenderSettings& settings, bool readback);
+};
+
+Status GpuRenderer::Impl::init(const Model& model) {
+  ctx = &context->impl();
+  device = ctx->device;
+  VKLOC_TRY_STATUS(validateModel(model));
+  ranges = model.ranges;
+  blocks = model.blocks;
+  materials = model.materials;
+
+  // Vertices relative to the model's centre keep float precision for large world coordinates.
+  if (!model.bounds.empty()) {
+    for (int i = 0; i < 3; ++i) origin[i] = std::floor(0.5 * (double(model.bounds.min[i]) + model.bounds.max[i]));
+  }
+  const size_t nv = model.vertexCount();
+  std::vector<float> rel(model.positions.size());
+  for (size_t i = 0; i < nv; ++i) {
+    for (int k = 0; k < 3; ++k) rel[i * 3 + k] = static_cast<float>(model.positions[i * 3 + k] - origin[k]);
+  }
+  std::vector<VertexAttributes> attrs(nv);
+  for (size_t i = 0; i < nv; ++i) {
+    if (!model.uvs.empty()) {
+      attrs[i].uv[0] = model.uvs[i * 2];
+      attrs[i].uv[1] = model.uvs[i * 2 + 1];
+    } else {
+      attrs[i].uv[0] = attrs[i].uv[1] = 0.0f;
+    }
+    for (int k = 0; k < 4; ++k) attrs[i].rgba[k] = model.colors.empty() ? 255 : model.colors[i * 4 + k];
+  }
+  const VkBufferUsageFlags vb = VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  auto make = [&](Buffer& dst, const void* data, size_t bytes, VkBufferUsageFlags usage) -> Status {
+    auto b = ctx->createBuffer(bytes, usage, false);
+    if (!b.ok()) return b.error();
+    dst = std::move(*b);
+    return ctx->upload(dst, data, bytes);
+  };
+  VKLOC_TRY_STATUS(make(positions, rel.data(), rel.size() * sizeof(float), vb));
+  VKLOC_TRY_STATUS(make(attributes, attrs.data(), attrs.size() * sizeof(VertexAttributes), vb));
+  VKLOC_TRY_STATUS(make(indices, model.indices.data(), model.indices.size() * sizeof(uint32_t),
+                        VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT));
+
+  // Textures (a 1x1 white one when the model has none, so the descriptor array is never empty).
+  std::vector<Texture> host_textures = model.textures;
+  if (host_textures.empty()) host_textures.push_back(Texture{"white", 1, 1, {255, 255, 255, 255}});
+  texture_count = static_cast<int>(host_textures.size());
+  if (static_cast<uint32_t>(texture_count) > ctx->properties.limits.maxPerStageDescriptorSamplers ||
+      static_cast<uint32_t>(texture_count) > ctx->properties.limits.maxDescriptorSetSampledImages) {
+    return makeError(ErrorCode::kUnsupported,
+                     fmt::format("{}: {} textures exceed this device's limit of {} per shader stage", model.source,
+                                 texture_count, ctx->properties.limits.maxPerStageDescriptorSamplers));
+  }
+  for (const Texture& t : host_textures) {
+    auto img = ctx->createImage(static_cast<uint32_t>(t.width), static_cast<uint32_t>(t.height), kColorFormat,
+                                VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+    if (!img.ok()) return img.error();
+    VKLOC_TRY_STATUS(ctx->uploadImage(*img, t.rgba.data(), t.rgba.size()));
+    textures.push_back(std::move(*img));
+  }
+  VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  sci.magFilter = sci.minFilter = VK_FILTER_LINEAR;
+  sci.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+  sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_REPEAT;
+  sci.maxLod = 0.0f;
+  VkSampler s = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateSampler(device, &sci, nullptr, &s));
+  sampler = DeviceHandle<VkSampler>(device, s, vkDestroySampler);
+
+  VkDescriptorSetLayoutBinding binding{};
+  binding.binding = 0;
+  binding.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  binding.descriptorCount = static_cast<uint32_t>(texture_count);
+  binding.stageFlags = VK_SHADER_STAGE_FRAGMENT_BIT;
+  VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  lci.bindingCount = 1;
+  lci.pBindings = &binding;
+  VkDescriptorSetLayout layout = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateDescriptorSetLayout(device, &lci, nullptr, &layout));
+  set_layout = DeviceHandle<VkDescriptorSetLayout>(device, layout, vkDestroyDescriptorSetLayout);
+  VkDescriptorPoolSize pool_size{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, static_cast<uint32_t>(texture_count)};
+  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  dpci.maxSets = 1;
+  dpci.poolSizeCount = 1;
+  dpci.pPoolSizes = &pool_size;
+  VkDescriptorPool pool = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateDescriptorPool(device, &dpci, nullptr, &pool));
+  descriptor_pool = DeviceHandle<VkDescriptorPool>(device, pool, vkDestroyDescriptorPool);
+  VkDescriptorSetAllocateInfo dsai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  dsai.descriptorPool = pool;
+  dsai.descriptorSetCount = 1;
+  dsai.pSetLayouts = &layout;
+  VKLOC_VK(vkAllocateDescriptorSets(device, &dsai, &descriptor_set));
+  std::vector<VkDescriptorImageInfo> infos;
+  for (const auto& t : textures) {
+    infos.push_back({sampler.get(), t.view.get(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL});
+  }
+  VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+  write.dstSet = descriptor_set;
+  write.dstBinding = 0;
+  write.descriptorCount = static_cast<uint32_t>(infos.size());
+  write.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  write.pImageInfo = infos.data();
+  vkUpdateDescriptorSets(device, 1, &write, 0, nullptr);
+  texture_ok.assign(materials.size(), false);
+  for (size_t m = 0; m < materials.size(); ++m) {
+    texture_ok[m] = materials[m].texture >= 0 && materials[m].texture < static_cast<int>(model.textures.size());
+  }
+
+  VkPushConstantRange push{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(engine::ModelPush)};
+  VkPipelineLayoutCreateInfo plci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  plci.setLayoutCount = 1;
+  plci.pSetLayouts = &layout;
+  plci.pushConstantRangeCount = 1;
+  plci.pPushConstantRanges = &push;
+  VkPipelineLayout pl = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreatePipelineLayout(device, &plci, nullptr, &pl));
+  pipeline_layout = DeviceHandle<VkPipelineLayout>(device, pl, vkDestroyPipelineLayout);
+
+  auto v = shaderModule(device, "model.vert");
+  if (!v.ok()) return v.error();
+  vert = std::move(*v);
+  auto f = shaderModule(device, "model.frag");
+  if (!f.ok()) return f.error();
+  frag = std::move(*f);
+  VKLOC_TRY_STATUS(createRenderPasses());
+
+  auto c = ctx->allocateCommandBuffer();
+  if (!c.ok()) return c.error();
+  cmd = *c;
+  VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  VkFence fe = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateFence(device, &fci, nullptr, &fe));
+  fence = DeviceHandle<VkFence>(device, fe, vkDestroyFence);
+  return Status::success();
+}
+
+Status GpuRenderer::Impl::createRenderPasses() {
+  for (int with_normals = 0; with_normals < 2; ++with_normals) {
+    std::vector<VkAttachmentDescription> att;
+    auto color_att = [&](VkFormat format) {
+      VkAttachmentDescription a{};
+      a.format = format;
+      a.samples = VK_SAMPLE_COUNT_1_BIT;
+      a.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+      a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+      a.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+      a.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+      a.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+      a.finalLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+      att.push_back(a);
+    };
+    color_att(kColorFormat);
+    color_att(kLinearDepthFormat);
+    if (with_normals) color_att(kNormalFormat);
+    VkAttachmentDescription d{};
+    d.format = kDepthFormat;
+    d.samples = VK_SAMPLE_COUNT_1_BIT;
+    d.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    d.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    d.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+    d.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    d.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+    d.finalLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    att.push_back(d);
+    const uint32_t ncolor = with_normals ? 3 : 2;
+    VkAttachmentReference refs[3] = {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
+                                     {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
+                                     {2, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
+    VkAttachmentReference depth_ref{ncolor, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+    VkSubpassDescription sub{};
+    sub.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+    sub.colorAttachmentCount = ncolor;
+    sub.pColorAttachments = refs;
+    sub.pDepthStencilAttachment = &depth_ref;
+    VkSubpassDependency deps[2]{};
+    // Earlier reads of the targets (readback copies) finish before this pass writes them.
+    deps[0].srcSubpass = VK_SUBPASS_EXTERNAL;
+    deps[0].dstSubpass = 0;
+    deps[0].srcStageMask = VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT;
+    deps[0].dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT;
+    deps[0].srcAccessMask = 0;
+    deps[0].dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+    // Colour writes are visible to the transfer (readback) and compute stages that follow.
+    deps[1].srcSubpass = 0;
+    deps[1].dstSubpass = VK_SUBPASS_EXTERNAL;
+    deps[1].srcStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT;
+    deps[1].dstStageMask = VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT;
+    deps[1].srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
+    deps[1].dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_SHADER_READ_BIT;
+    VkRenderPassCreateInfo rpci{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+    rpci.attachmentCount = static_cast<uint32_t>(att.size());
+    rpci.pAttachments = att.data();
+    rpci.subpassCount = 1;
+    rpci.pSubpasses = &sub;
+    rpci.dependencyCount = 2;
+    rpci.pDependencies = deps;
+    VkRenderPass rp = VK_NULL_HANDLE;
+    VKLOC_VK(vkCreateRenderPass(device, &rpci, nullptr, &rp));
+    render_pass[with_normals] = DeviceHandle<VkRenderPass>(device, rp, vkDestroyRenderPass);
+  }
+  return Status::success();
+}
+
+Result<VkPipeline> GpuRenderer::Impl::pipeline(bool normals, bool cull) {
+  const int key = (normals ? 1 : 0) | (cull ? 2 : 0);
+  if (auto it = pipelines.find(key); it != pipelines.end()) return it->second.get();
+
+  const VkSpecializationMapEntry entries[2] = {{0, 0, 4}, {1, 4, 4}};
+  const int32_t spec_data[2] = {texture_count, normals ? 1 : 0};
+  VkSpecializationInfo spec{2, entries, sizeof(spec_data), spec_data};
+  VkPipelineShaderStageCreateInfo stages[2]{};
+  stages[0].sType = stages[1].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+  stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
+  stages[0].module = vert.get();
+  stages[0].pName = "main";
+  stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+  stages[1].module = frag.get();
+  stages[1].pName = "main";
+  stages[1].pSpecializationInfo = &spec;
+
+  const VkVertexInputBindingDescription bindings[2] = {{0, 12, VK_VERTEX_INPUT_RATE_VERTEX},
+                                                       {1, sizeof(VertexAttributes), VK_VERTEX_INPUT_RATE_VERTEX}};
+  const VkVertexInputAttributeDescription attrs[3] = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0},
+                                                      {1, 1, VK_FORMAT_R32G32_SFLOAT, 0},
+                                                      {2, 1, VK_FORMAT_R8G8B8A8_UNORM, 8}};
+  VkPipelineVertexInputStateCreateInfo vin{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+  vin.vertexBindingDescriptionCount = 2;
+  vin.pVertexBindingDescriptions = bindings;
+  vin.vertexAttributeDescriptionCount = 3;
+  vin.pVertexAttributeDescriptions = attrs;
+  VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+  ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+  VkPipelineViewportStateCreateInfo vp{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+  vp.viewportCount = 1;
+  vp.scissorCount = 1;
+  VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+  rs.polygonMode = VK_POLYGON_MODE_FILL;
+  // Model triangles are counter-clockwise seen from their front; with the camera's y axis
+  // pointing down the image they stay counter-clockwise in Vulkan framebuffer coordinates.
+  rs.cullMode = cull ? VK_CULL_MODE_BACK_BIT : VK_CULL_MODE_NONE;
+  rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+  rs.lineWidth = 1.0f;
+  VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+  ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+  VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+  ds.depthTestEnable = VK_TRUE;
+  ds.depthWriteEnable = VK_TRUE;
+  ds.depthCompareOp = VK_COMPARE_OP_GREATER;  // reverse-Z: nearer is larger
+  VkPipelineColorBlendAttachmentState blend[3]{};
+  for (auto& b : blend) b.colorWriteMask = 0xf;
+  VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+  cb.attachmentCount = normals ? 3 : 2;
+  cb.pAttachments = blend;
+  const VkDynamicState dyn_states[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+  VkPipelineDynamicStateCreateInfo dyn{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+  dyn.dynamicStateCount = 2;
+  dyn.pDynamicStates = dyn_states;
+  VkGraphicsPipelineCreateInfo gci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+  gci.stageCount = 2;
+  gci.pStages = stages;
+  gci.pVertexInputState = &vin;
+  gci.pInputAssemblyState = &ia;
+  gci.pViewportState = &vp;
+  gci.pRasterizationState = &rs;
+  gci.pMultisampleState = &ms;
+  gci.pDepthStencilState = &ds;
+  gci.pColorBlendState = &cb;
+  gci.pDynamicState = &dyn;
+  gci.layout = pipeline_layout.get();
+  gci.renderPass = render_pass[normals ? 1 : 0].get();
+  VkPipeline p = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &gci, nullptr, &p));
+  pipelines[key] = DeviceHandle<VkPipeline>(device, p, vkDestroyPipeline);
+  return p;
+}
+
+Status GpuRenderer::Impl::ensureTargets(uint32_t width, uint32_t height) {
+  if (targets.width == width && targets.height == height) return Status::success();
+  vkDeviceWaitIdle(device);
+  targets = Targets{};
+  const VkImageUsageFlags color_usage =
+      VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
+  auto mk = [&](engine::Image& dst, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect) -> Status {
+    auto img = ctx->createImage(width, height, format, usage, aspect);
+    if (!img.ok()) return img.error();
+    dst = std::move(*img);
+    return Status::success();
+  };
+  VKLOC_TRY_STATUS(mk(targets.color, kColorFormat, color_usage, VK_IMAGE_ASPECT_COLOR_BIT));
+  VKLOC_TRY_STATUS(mk(targets.linear_depth, kLinearDepthFormat, color_usage, VK_IMAGE_ASPECT_COLOR_BIT));
+  VKLOC_TRY_STATUS(mk(targets.normals, kNormalFormat, color_usage, VK_IMAGE_ASPECT_COLOR_BIT));
+  VKLOC_TRY_STATUS(mk(targets.depth, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT));
+  for (int with_normals = 0; with_normals < 2; ++with_normals) {
+    std::vector<VkImageView> views = {targets.color.view.get(), targets.linear_depth.view.get()};
+    if (with_normals) views.push_back(targets.normals.view.get());
+    views.push_back(targets.depth.view.get());
+    VkFramebufferCreateInfo fci{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+    fci.renderPass = render_pass[with_normals].get();
+    fci.attachmentCount = static_cast<uint32_t>(views.size());
+    fci.pAttachments = views.data();
+    fci.width = width;
+    fci.height = height;
+    fci.layers = 1;
+    VkFramebuffer fb = VK_NULL_HANDLE;
+    VKLOC_VK(vkCreateFramebuffer(device, &fci, nullptr, &fb));
+    targets.framebuffer[with_normals] = DeviceHandle<VkFramebuffer>(device, fb, vkDestroyFramebuffer);
+  }
+  const VkDeviceSize pixels = static_cast<VkDeviceSize>(width) * height;
+  auto rb = ctx->createBuffer(pixels * 12, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
+  if (!rb.ok()) return rb.error();
+  targets.readback = std::move(*rb);
+  targets.width = width;
+  targets.height = height;
+  return Status::success();
+}
+
+Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, const Pose& T_world_camera,
+                                               const RenderSettings& settings, bool readback) {
+  VKLOC_TRY_STATUS(validateCamera(camera));
+  if (!isValidPose(T_world_camera)) {
+    return makeError(ErrorCode::kInvalidArgument, "render: T_world_camera is not a finite rigid transform");
+  }
+  if (!(settings.near_m > 0.0) || !(settings.far_m > settings.near_m) || !std::isfinite(settings.far_m)) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("render: need 0 < near < far (near {} m, far {} m)", settings.near_m, settings.far_m));
+  }
+  const uint32_t w = static_cast<uint32_t>(camera.width), h = static_cast<uint32_t>(camera.height);
+  VKLOC_TRY_STATUS(ensureTargets(w, h));
+  const bool normals = (settings.outputs & kRenderNormals) != 0;
+  auto pipe = pipeline(normals, settings.cull_back_faces);
+  if (!pipe.ok()) return pipe.error();
+
+  // Block frustum culling on the host, then merge adjacent ranges of one material into draws.
+  RenderOutput out;
+  struct Draw {
+    uint32_t first, count;
+    int material;
+  };
+  std::vector<Draw> draws;
+  for (const Block& b : blocks) {
+    if (!aabbInFrustum(b.bounds, camera, T_world_camera, settings.near_m, settings.far_m)) continue;
+    ++out.blocks_drawn;
+    out.triangles_drawn += b.triangle_count;
+    for (uint32_t r = b.first_range; r < b.first_range + b.range_count; ++r) {
+      const DrawRange& range = ranges[r];
+      if (!draws.empty() && draws.back().material == range.material &&
+          draws.back().first + draws.back().count == range.first_index) {
+        draws.back().count += range.index_count;
+      } else {
+        draws.push_back({range.first_index, range.index_count, range.material});
+      }
+    }
+  }
+
+  // clip_from_origin = P * T_camera_world * T_world_origin, composed in double.
+  Eigen::Matrix4d T_world_origin = Eigen::Matrix4d::Identity();
+  T_world_origin.block<3, 1>(0, 3) = Eigen::Vector3d(origin[0], origin[1], origin[2]);
+  const Eigen::Matrix4d clip = projectionMatrix(camera, settings.near_m, settings.far_m) *
+                               T_world_camera.inverse().matrix() * T_world_origin;
+  engine::ModelPush push{};
+  for (int c = 0; c < 4; ++c) {
+    for (int r = 0; r < 4; ++r) push.clip_from_origin[c * 4 + r] = static_cast<float>(clip(r, c));
+  }
+  push.intrinsics[0] = static_cast<float>(camera.fx);
+  push.intrinsics[1] = static_cast<float>(camera.fy);
+  push.intrinsics[2] = static_cast<float>(camera.cx);
+  push.intrinsics[3] = static_cast<float>(camera.cy);
+
+  VKLOC_VK(vkResetCommandBuffer(cmd, 0));
+  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  VKLOC_VK(vkBeginCommandBuffer(cmd, &begin));
+  VkClearValue clears[4]{};
+  for (int k = 0; k < 4; ++k) clears[0].color.float32[k] = settings.background_rgba[k] / 255.0f;
+  clears[1].color.float32[0] = kBackgroundDepth;
+  const uint32_t nclear = normals ? 4 : 3;
+  clears[nclear - 1].depthStencil = {0.0f, 0};  // reverse-Z: 0 is infinitely far
+  VkRenderPassBeginInfo rpbi{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+  rpbi.renderPass = render_pass[normals ? 1 : 0].get();
+  rpbi.framebuffer = targets.framebuffer[normals ? 1 : 0].get();
+  rpbi.renderArea = {{0, 0}, {w, h}};
+  rpbi.clearValueCount = nclear;
+  rpbi.pClearValues = clears;
+  vkCmdBeginRenderPass(cmd, &rpbi, VK_SUBPASS_CONTENTS_INLINE);
+  if (!draws.empty()) {
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, *pipe);
+    VkViewport viewport{0.0f, 0.0f, static_cast<float>(w), static_cast<float>(h), 0.0f, 1.0f};
+    VkRect2D scissor{{0, 0}, {w, h}};
+    vkCmdSetViewport(cmd, 0, 1, &viewport);
+    vkCmdSetScissor(cmd, 0, 1, &scissor);
+    const VkBuffer vbs[2] = {positions.buffer.get(), attributes.buffer.get()};
+    const VkDeviceSize offsets[2] = {0, 0};
+    vkCmdBindVertexBuffers(cmd, 0, 2, vbs, offsets);
+    vkCmdBindIndexBuffer(cmd, indices.buffer.get(), 0, VK_INDEX_TYPE_UINT32);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_layout.get(), 0, 1, &descriptor_set, 0,
+                            nullptr);
+    int bound_material = -2;
+    for (const Draw& d : draws) {
+      if (d.material != bound_material) {
+        const Material& m = materials[static_cast<size_t>(d.material)];
+        for (int k = 0; k < 4; ++k) push.base_color[k] = m.base_color[k];
+        push.texture = texture_ok[static_cast<size_t>(d.material)] ? m.texture : 0;
+        push.flags = texture_ok[static_cast<size_t>(d.material)] ? VKLOC_FLAG_TEXTURED : 0u;
+        vkCmdPushConstants(cmd, pipeline_layout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                           sizeof(push), &push);
+        bound_material = d.material;
+      }
+      vkCmdDrawIndexed(cmd, d.count, 1, d.first, 0, 0);
+    }
+  }
+  vkCmdEndRenderPass(cmd);
+
+  const VkDeviceSize pixels = static_cast<VkDeviceSize>(w) * h;
+  if (readback) {
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageExtent = {w, h, 1};
+    region.bufferOffset = 0;
+    vkCmdCopyImageToBuffer(cmd, targets.color.image.get(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                           targets.readback.buffer.get(), 1, &region);
+    region.bufferOffset = pixels * 4;
+    vkCmdCopyImageToBuffer(cmd, targets.linear_depth.image.get(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                           targets.readback.buffer.get(), 1, &region);
+    if (normals) {
+      region.bufferOffset = pixels * 8;
+      vkCmdCopyImageToBuffer(cmd, targets.normals.image.get(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                             targets.readback.buffer.get(), 1, &region);
+    }
+    VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr, 0,
+                         nullptr);
+  }
+  VKLOC_VK(vkEndCommandBuffer(cmd));
+  VKLOC_TRY_STATUS(ctx->submitAndWait(cmd, fence.get()));
+  if (!readback) return out;
+
+  const auto* base = static_cast<const uint8_t*>(targets.readback.mapped);
+  const int iw = static_cast<int>(w), ih = static_cast<int>(h);
+  out.rgba = ImageU8(iw, ih, 4);
+  std::memcpy(out.rgba.data.data(), base, pixels * 4);
+  out.gray = rgbaToGray(out.rgba);
+  out.depth = ImageF32(iw, ih, 1);
+  std::memcpy(out.depth.data.data(), base + pixels * 4, pixels * 4);
+  if (normals) {
+    out.normals = ImageF32(iw, ih, 3, 0.0f);
+    const auto* enc = reinterpret_cast<const uint16_t*>(base + pixels * 8);
+    for (VkDeviceSize i = 0; i < pixels; ++i) {
+      if (out.depth.data[i] == kBackgroundDepth) continue;
+      octDecode(halfToFloat(enc[2 * i]), halfToFloat(enc[2 * i + 1]), &out.normals.data[i * 3]);
+    }
+  }
+  return out;
+}
+
+GpuRenderer::GpuRenderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+GpuRenderer::~GpuRenderer() = default;
+
+Result<std::unique_ptr<GpuRenderer>> GpuRenderer::create(std::shared_ptr<GpuContext> context, const Model& model) {
+  if (!context) return makeError(ErrorCode::kInvalidArgument, "GpuRenderer: null context");
+  auto impl = std::make_unique<Impl>();
+  impl->context = std::move(context);
+  VKLOC_TRY_STATUS(impl->init(model));
+  return std::unique_ptr<GpuRenderer>(new GpuRenderer(std::move(impl)));
+}
+
+Result<RenderOutput> GpuRenderer::render(const PinholeCamera& camera, const Pose& T_world_camera,
+                                         const RenderSettings& settings) {
+  return impl_->render(camera, T_world_camera, settings, true);
+}
+
+Result<RenderOutput> GpuRenderer::renderOnGpu(const PinholeCamera& camera, const Pose& T_world_camera,
+                                              const RenderSettings& settings) {
+  return impl_->render(camera, T_world_camera, settings, false);
+}
+
+}  // namespace vkloc

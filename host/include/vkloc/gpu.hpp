@@ -1,0 +1,92 @@
+// vkloc: the Vulkan device and the GPU model renderer. No Vulkan types are exposed.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "vkloc/render.hpp"
+
+namespace vkloc {
+
+/// A Vulkan physical device as seen by vkloc.
+struct GpuDeviceInfo {
+  int index = 0;             ///< Position in the Vulkan enumeration order.
+  std::string name;          ///< e.g. "llvmpipe (LLVM 15.0.6, 256 bits)".
+  std::string type;          ///< "discrete", "integrated", "virtual", "cpu" or "other".
+  std::string api_version;   ///< e.g. "1.3.230".
+  std::string driver;        ///< Driver name and version info.
+  bool usable = false;       ///< Meets vkloc's requirements (Vulkan 1.2, features).
+  std::string why_unusable;  ///< Empty when usable.
+};
+
+/// How to pick and set up a device.
+struct GpuOptions {
+  /// Device to use: "" picks automatically (discrete > integrated > virtual > cpu); a number
+  /// selects by index; other text selects the first device whose name contains it
+  /// (case-insensitive). The environment variable VKLOC_DEVICE overrides an empty value.
+  std::string device;
+  /// Enables VK_LAYER_KHRONOS_validation. Default from the environment variable
+  /// VKLOC_VALIDATION (1/0); otherwise on in debug builds, off in release builds.
+  int validation = -1;
+  /// Called with every validation message; messages are also counted (validationMessages()).
+  bool print_validation = true;
+};
+
+/// Owns the Vulkan instance and device. Create once, share between renderers; not thread-safe.
+class GpuContext {
+ public:
+  /// Lists every Vulkan device. kNoDevice (with the Debian package to install) when no Vulkan
+  /// driver is present.
+  static Result<std::vector<GpuDeviceInfo>> listDevices();
+  /// Creates the context on the selected device. kNoDevice / kNotFound with a one-line message
+  /// when nothing suitable exists.
+  static Result<std::shared_ptr<GpuContext>> create(const GpuOptions& options = {});
+
+  ~GpuContext();
+  GpuContext(const GpuContext&) = delete;
+  GpuContext& operator=(const GpuContext&) = delete;
+
+  const GpuDeviceInfo& device() const;
+  bool validationEnabled() const;
+  /// Number of validation warnings and errors reported since creation.
+  uint64_t validationMessages() const;
+
+  struct Impl;
+  Impl& impl() { return *impl_; }
+
+ private:
+  explicit GpuContext(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Renders one model with Vulkan. Model data is uploaded once at creation; render targets are
+/// (re)allocated when the camera size changes.
+class GpuRenderer {
+ public:
+  /// Uploads the model (vertices, indices, textures). kInvalidArgument for an invalid model,
+  /// kGpuError when the device runs out of memory.
+  static Result<std::unique_ptr<GpuRenderer>> create(std::shared_ptr<GpuContext> context,
+                                                     const Model& model);
+  ~GpuRenderer();
+
+  /// Renders the model at T_world_camera and reads the requested outputs back to the host.
+  /// kInvalidArgument for an invalid camera, pose or settings.
+  Result<RenderOutput> render(const PinholeCamera& camera, const Pose& T_world_camera,
+                              const RenderSettings& settings = {});
+
+  /// Renders without reading back (the images stay on the GPU for later stages). Returns the
+  /// statistics part of RenderOutput with empty images.
+  Result<RenderOutput> renderOnGpu(const PinholeCamera& camera, const Pose& T_world_camera,
+                                   const RenderSettings& settings = {});
+
+  struct Impl;
+  Impl& impl() { return *impl_; }
+
+ private:
+  explicit GpuRenderer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace vkloc

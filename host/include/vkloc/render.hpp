@@ -1,0 +1,66 @@
+// vkloc: what a model render produces, and the CPU reference renderer.
+#pragma once
+
+#include <cstdint>
+
+#include "vkloc/camera.hpp"
+#include "vkloc/image.hpp"
+#include "vkloc/model.hpp"
+#include "vkloc/pose.hpp"
+
+namespace vkloc {
+
+/// Which outputs a render fills. Colour and depth are always produced.
+enum RenderOutputFlags : uint32_t {
+  kRenderColor = 1u << 0,    ///< RGBA8 and 8-bit gray.
+  kRenderDepth = 1u << 1,    ///< Linear metric depth.
+  kRenderNormals = 1u << 2,  ///< Camera-frame face normals.
+  kRenderAll = kRenderColor | kRenderDepth | kRenderNormals,
+};
+
+/// Depth range and appearance settings of a render.
+struct RenderSettings {
+  double near_m = 0.05;     ///< Near clip plane, metres (camera z). Surfaces closer are clipped.
+  double far_m = 5000.0;    ///< Far clip plane, metres. Surfaces farther are background.
+  /// RGBA8 written where no surface is seen.
+  std::array<uint8_t, 4> background_rgba{0, 0, 0, 0};
+  bool cull_back_faces = false;  ///< Skip triangles seen from behind (needs consistent winding).
+  uint32_t outputs = kRenderAll; ///< RenderOutputFlags to fill.
+};
+
+/// Depth value of pixels where no surface is seen (metres).
+constexpr float kBackgroundDepth = 0.0f;
+
+/// A rendered view. Images are camera.width x camera.height, rows top to bottom.
+struct RenderOutput {
+  ImageU8 rgba;     ///< 4 channels, sRGB-encoded colour as stored in textures; alpha 255 on surfaces.
+  ImageU8 gray;     ///< 1 channel, BT.601 luma of rgba.
+  /// 1 channel, metres: camera-frame z of the visible surface (not the distance along the ray);
+  /// kBackgroundDepth (0) where no surface is seen.
+  ImageF32 depth;
+  /// 3 channels, unit face normal in the camera frame pointing towards the camera; (0, 0, 0)
+  /// on background.
+  ImageF32 normals;
+  uint32_t blocks_drawn = 0;     ///< Blocks that passed frustum culling.
+  uint32_t triangles_drawn = 0;  ///< Triangles submitted after culling.
+};
+
+/// Column-major 4x4 clip transform for a pinhole camera in Vulkan's conventions, reverse-Z:
+/// camera z = near maps to depth 1, z = far to 0; x_ndc = 2 (u + 0.5) / width - 1 with
+/// u = fx x / z + cx (seed 001 eqs. 7-8 without the OpenGL y flip). Multiply with
+/// T_camera_world for the model-view-projection.
+Eigen::Matrix4d projectionMatrix(const PinholeCamera& camera, double near_m, double far_m);
+
+/// Returns true when the box may intersect the camera's view frustum (near..far), false when
+/// it lies entirely outside one of the six planes.
+bool aabbInFrustum(const Aabb& box, const PinholeCamera& camera, const Pose& T_world_camera,
+                   double near_m, double far_m);
+
+/// CPU reference renderer: scanline rasterizer with the same conventions as the GPU renderer
+/// (pixel-centre sampling, top-left fill rule, perspective-correct attributes, bilinear
+/// repeat texture sampling, nearest depth wins). Slow; meant as a test oracle.
+Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& camera,
+                                     const Pose& T_world_camera,
+                                     const RenderSettings& settings = {});
+
+}  // namespace vkloc

@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Installs dependencies (as root), builds with -Werror and runs the whole test suite:
+# unit tests, Vulkan tests on the available device (lavapipe without a GPU) with the
+# validation layer on, command-line tests and the labelled accuracy tests.
+# Select labels with e.g. `scripts/test.sh -L unit` (arguments go to ctest).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if [ "$(id -u)" -eq 0 ]; then bash scripts/install-deps.sh; fi
+cmake --preset ci >/dev/null
+cmake --build --preset ci
+ctest --preset ci -j "$(nproc)" "$@"

@@ -1,0 +1,107 @@
+#include "common.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "vkloc/demo.hpp"
+#include "vkloc/image.hpp"
+
+namespace vkloc::cli {
+
+bool isDemoModel(const std::string& name) { return name == "city" || name == "room"; }
+
+void ModelArgs::add(CLI::App& app) {
+  app.add_option("--model,-m", model, "Model file (.obj .ply .gltf .glb .drc ...) or built-in: city, room")
+      ->capture_default_str();
+  app.add_option("--unit-scale", unit_scale, "Metres per model unit")->capture_default_str();
+  app.add_option("--model-pose", T_world_model,
+                 "T_world_model: 'tx ty tz qx qy qz qw' or 16 numbers (row-major 4x4)");
+  app.add_option("--block-triangles", block_triangles, "Target triangles per spatial block (0 = one block)")
+      ->capture_default_str();
+}
+
+Model ModelArgs::load() const {
+  if (isDemoModel(model) && !std::filesystem::exists(model)) {
+    Model m = take(makeDemoModel(model));
+    if (block_triangles != 32768) buildBlocks(m, block_triangles);
+    return m;
+  }
+  ModelLoadOptions options;
+  options.unit_scale = unit_scale;
+  options.max_block_triangles = block_triangles;
+  if (!T_world_model.empty()) {
+    const Pose T = take(parsePose(T_world_model));
+    for (int r = 0; r < 4; ++r) {
+      for (int c = 0; c < 4; ++c) options.T_world_model[r * 4 + c] = T.matrix()(r, c);
+    }
+  }
+  std::vector<std::string> warnings;
+  Model m = take(loadModel(model, options, &warnings));
+  for (const auto& w : warnings) std::fprintf(stderr, "vkloc: warning: %s\n", w.c_str());
+  return m;
+}
+
+void CameraArgs::add(CLI::App& app) {
+  app.add_option("--camera,-c", file, "Camera file (YAML/JSON with fx fy cx cy width height)");
+  app.add_option("--intrinsics", intrinsics, "Inline camera 'fx,fy,cx,cy,width,height' (default 525,525,319.5,239.5,640,480)");
+}
+
+PinholeCamera CameraArgs::get() const {
+  if (!file.empty() && !intrinsics.empty()) throw Failure{"give either --camera or --intrinsics, not both"};
+  if (!file.empty()) return take(loadCamera(file));
+  PinholeCamera cam;
+  if (!intrinsics.empty()) {
+    std::string s = intrinsics;
+    for (char& ch : s) {
+      if (ch == ',') ch = ' ';
+    }
+    std::istringstream in(s);
+    double v[6];
+    for (double& x : v) {
+      if (!(in >> x)) throw Failure{fmt::format("--intrinsics '{}': expected fx,fy,cx,cy,width,height", intrinsics)};
+    }
+    cam = PinholeCamera{v[0], v[1], v[2], v[3], static_cast<int>(v[4]), static_cast<int>(v[5])};
+  }
+  check(validateCamera(cam));
+  return cam;
+}
+
+void DeviceArgs::add(CLI::App& app) {
+  app.add_option("--device,-d", device, "Vulkan device: index or part of its name (default: best; env VKLOC_DEVICE)");
+}
+
+std::shared_ptr<GpuContext> DeviceArgs::create() const {
+  GpuOptions options;
+  options.device = device;
+  return take(GpuContext::create(options));
+}
+
+std::vector<std::string> writeRender(const std::string& dir, const std::string& stem, const RenderOutput& out) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw Failure{fmt::format("{}: cannot create output directory: {}", dir, ec.message())};
+  std::vector<std::string> paths;
+  auto path = [&](const char* suffix) { return (std::filesystem::path(dir) / (stem + suffix)).string(); };
+  paths.push_back(path("_rgba.png"));
+  check(writePng(paths.back(), out.rgba));
+  paths.push_back(path("_gray.png"));
+  check(writePng(paths.back(), out.gray));
+  paths.push_back(path("_depth_mm.png"));
+  check(writePng(paths.back(), depthToMillimetres(out.depth)));
+  paths.push_back(path("_depth.tiff"));
+  check(writeFloatTiff(paths.back(), out.depth));
+  if (!out.normals.empty()) {
+    ImageU8 n(out.normals.width, out.normals.height, 3);
+    for (size_t i = 0; i < n.data.size(); ++i) {
+      n.data[i] = static_cast<uint8_t>(std::lround(127.5f + 127.5f * out.normals.data[i]));
+    }
+    paths.push_back(path("_normals.png"));
+    check(writePng(paths.back(), n));
+  }
+  return paths;
+}
+
+}  // namespace vkloc::cli

@@ -1,0 +1,77 @@
+// Shared pieces of the vkloc command-line verbs.
+#pragma once
+
+#include <chrono>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "vkloc/camera.hpp"
+#include "vkloc/gpu.hpp"
+#include "vkloc/model.hpp"
+#include "vkloc/pose.hpp"
+
+namespace vkloc::cli {
+
+/// Thrown inside a verb to stop with a one-line message and exit code 1.
+struct Failure {
+  std::string message;
+};
+
+/// Unwraps a Result or throws Failure with its message.
+template <typename T>
+T take(Result<T> r) {
+  if (!r.ok()) throw Failure{r.error().message};
+  return std::move(r).value();
+}
+inline void check(const Status& s) {
+  if (!s.ok()) throw Failure{s.error().message};
+}
+
+/// Model options shared by verbs that load a model.
+struct ModelArgs {
+  std::string model = "city";   ///< File path, or a built-in name: city, room.
+  double unit_scale = 1.0;
+  std::string T_world_model;    ///< "" or 7/16 numbers.
+  uint32_t block_triangles = 32768;
+  void add(CLI::App& app);
+  /// Loads the model (or builds the demo); prints warnings to stderr.
+  Model load() const;
+};
+
+/// Camera options: a file, or inline intrinsics, or the default 640x480.
+struct CameraArgs {
+  std::string file;
+  std::string intrinsics;  ///< "fx,fy,cx,cy,width,height"
+  void add(CLI::App& app);
+  PinholeCamera get() const;
+};
+
+/// Device options.
+struct DeviceArgs {
+  std::string device;
+  void add(CLI::App& app);
+  std::shared_ptr<GpuContext> create() const;
+};
+
+/// True when the name is a built-in demo model.
+bool isDemoModel(const std::string& name);
+
+/// Milliseconds since `t0`.
+inline double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Writes rgba.png, gray.png, depth_mm.png, depth.tiff (and normals.png) for one render,
+/// named with `stem` in `dir`. Returns the paths written.
+std::vector<std::string> writeRender(const std::string& dir, const std::string& stem, const RenderOutput& out);
+
+void addRenderVerb(CLI::App& app);
+void addInfoVerb(CLI::App& app);
+void addDevicesVerb(CLI::App& app);
+void addBenchVerb(CLI::App& app);
+void addDemoVerb(CLI::App& app);
+
+}  // namespace vkloc::cli

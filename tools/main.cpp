@@ -1,0 +1,27 @@
+// vkloc: command-line entry point. One verb per file in tools/.
+#include <cstdio>
+
+#include "common.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"vkloc: model-based camera localization with Vulkan"};
+  app.require_subcommand(1);
+  app.set_help_all_flag("--help-all", "Help for every command");
+  vkloc::cli::addDemoVerb(app);
+  vkloc::cli::addRenderVerb(app);
+  vkloc::cli::addInfoVerb(app);
+  vkloc::cli::addDevicesVerb(app);
+  vkloc::cli::addBenchVerb(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const vkloc::cli::Failure& f) {
+    std::fprintf(stderr, "vkloc: error: %s\n", f.message.c_str());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "vkloc: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
