@@ -283,38 +283,93 @@ inline std::optional<double> raySphere(const Ray& ray, const Eigen::Vector3d& ce
   return t;
 }
 
-/// Moller-Trumbore ray-triangle intersection in double, t > 0, either winding.
+/// Moller-Trumbore ray-triangle intersection in double, t > 0, either winding. Plain scalar
+/// arithmetic so that it stays fast in unoptimised builds.
 inline std::optional<double> rayTriangle(const Ray& ray, const Eigen::Vector3d& a,
                                          const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  const Eigen::Vector3d e1 = b - a;
-  const Eigen::Vector3d e2 = c - a;
-  const Eigen::Vector3d pvec = ray.direction.cross(e2);
-  const double det = e1.dot(pvec);
+  const double* o = ray.origin.data();
+  const double* d = ray.direction.data();
+  const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double pv[3] = {d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2],
+                        d[0] * e2[1] - d[1] * e2[0]};
+  const double det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
   if (det == 0) return std::nullopt;
   const double inv_det = 1.0 / det;
-  const Eigen::Vector3d tvec = ray.origin - a;
-  const double u = tvec.dot(pvec) * inv_det;
+  const double tv[3] = {o[0] - a[0], o[1] - a[1], o[2] - a[2]};
+  const double u = (tv[0] * pv[0] + tv[1] * pv[1] + tv[2] * pv[2]) * inv_det;
   if (u < 0 || u > 1) return std::nullopt;
-  const Eigen::Vector3d qvec = tvec.cross(e1);
-  const double v = ray.direction.dot(qvec) * inv_det;
+  const double qv[3] = {tv[1] * e1[2] - tv[2] * e1[1], tv[2] * e1[0] - tv[0] * e1[2],
+                        tv[0] * e1[1] - tv[1] * e1[0]};
+  const double v = (d[0] * qv[0] + d[1] * qv[1] + d[2] * qv[2]) * inv_det;
   if (v < 0 || u + v > 1) return std::nullopt;
-  const double t = e2.dot(qvec) * inv_det;
+  const double t = (e2[0] * qv[0] + e2[1] * qv[1] + e2[2] * qv[2]) * inv_det;
   if (!(t > 0)) return std::nullopt;
   return t;
+}
+
+inline Eigen::Vector3d modelVertex(const Model& m, uint32_t i) {
+  return Eigen::Vector3d(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);
 }
 
 /// Nearest hit of any triangle of the model (brute force over all triangles).
 inline std::optional<double> rayModel(const Ray& ray, const Model& m) {
   std::optional<double> best;
-  auto vertex = [&](uint32_t i) {
-    return Eigen::Vector3d(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);
-  };
   for (size_t k = 0; k + 2 < m.indices.size(); k += 3) {
-    const auto t = rayTriangle(ray, vertex(m.indices[k]), vertex(m.indices[k + 1]),
-                               vertex(m.indices[k + 2]));
+    const auto t = rayTriangle(ray, modelVertex(m, m.indices[k]), modelVertex(m, m.indices[k + 1]),
+                               modelVertex(m, m.indices[k + 2]));
     if (t && (!best || *t < *best)) best = t;
   }
   return best;
+}
+
+/// Ray-cast depth image: per pixel (row-major) the camera z of the nearest triangle hit by the
+/// ray through the pixel centre (Moller-Trumbore), nullopt where none. A triangle entirely in
+/// front of the camera is tested only against the pixels in its projected bounding box grown
+/// by 2 px (a pruning that cannot miss a hit), any other triangle against every pixel.
+inline std::vector<std::optional<double>> rayCastDepth(const Model& m, const PinholeCamera& cam,
+                                                       const Pose& T_world_camera) {
+  const int w = cam.width;
+  const int h = cam.height;
+  std::vector<Ray> rays;
+  rays.reserve(static_cast<size_t>(w) * h);
+  for (int j = 0; j < h; ++j) {
+    for (int i = 0; i < w; ++i) rays.push_back(pixelRay(cam, T_world_camera, i, j));
+  }
+  const Pose T_camera_world = T_world_camera.inverse();
+  std::vector<std::optional<double>> depth(rays.size());
+  for (size_t k = 0; k + 2 < m.indices.size(); k += 3) {
+    const Eigen::Vector3d v[3] = {modelVertex(m, m.indices[k]), modelVertex(m, m.indices[k + 1]),
+                                  modelVertex(m, m.indices[k + 2])};
+    int i0 = 0, i1 = w - 1, j0 = 0, j1 = h - 1;
+    double u_lo = 1e300, u_hi = -1e300, v_lo = 1e300, v_hi = -1e300;
+    bool in_front = true;
+    for (const Eigen::Vector3d& p : v) {
+      const Eigen::Vector3d q = T_camera_world * p;
+      in_front = in_front && q.z() > 1e-9;
+      const double u = cam.fx * q.x() / q.z() + cam.cx;
+      const double vv = cam.fy * q.y() / q.z() + cam.cy;
+      u_lo = std::min(u_lo, u);
+      u_hi = std::max(u_hi, u);
+      v_lo = std::min(v_lo, vv);
+      v_hi = std::max(v_hi, vv);
+    }
+    if (in_front) {
+      if (u_hi < -2 || v_hi < -2 || u_lo > w + 1 || v_lo > h + 1) continue;
+      i0 = std::max(i0, static_cast<int>(std::floor(u_lo)) - 2);
+      i1 = std::min(i1, static_cast<int>(std::ceil(u_hi)) + 2);
+      j0 = std::max(j0, static_cast<int>(std::floor(v_lo)) - 2);
+      j1 = std::min(j1, static_cast<int>(std::ceil(v_hi)) + 2);
+    }
+    for (int j = j0; j <= j1; ++j) {
+      for (int i = i0; i <= i1; ++i) {
+        const size_t idx = static_cast<size_t>(j) * w + i;
+        const auto t = rayTriangle(rays[idx], v[0], v[1], v[2]);
+        if (t && (!depth[idx] || *t < *depth[idx])) depth[idx] = t;
+      }
+    }
+  }
+  return depth;
 }
 
 }  // namespace vkloc::test

@@ -26,3 +26,17 @@ foreach(args "info;--model;${WORK}/missing.obj" "render;--model;room;--pose;1 2 
     message(FATAL_ERROR "vkloc ${args}: expected a one-line error and exit 1, got rc=${rc} stderr='${err}'")
   endif()
 endforeach()
+# No Vulkan driver: a one-line error naming the package to install.
+execute_process(COMMAND ${CMAKE_COMMAND} -E env VK_ICD_FILENAMES=/nonexistent/icd.json VK_DRIVER_FILES=/nonexistent/icd.json
+                ${VKLOC} devices RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+string(STRIP "${err}" err)
+if(rc EQUAL 0 OR NOT err MATCHES "^vkloc: error: .*mesa-vulkan-drivers" OR err MATCHES "\n")
+  message(FATAL_ERROR "vkloc devices without a driver: expected a one-line error, got rc=${rc} stderr='${err}'")
+endif()
+# --help for every verb.
+foreach(verb demo render info devices bench)
+  execute_process(COMMAND ${VKLOC} ${verb} --help RESULT_VARIABLE rc OUTPUT_VARIABLE out)
+  if(NOT rc EQUAL 0 OR NOT out MATCHES "Usage|OPTIONS|Options")
+    message(FATAL_ERROR "vkloc ${verb} --help failed (${rc}): ${out}")
+  endif()
+endforeach()

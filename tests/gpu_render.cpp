@@ -124,8 +124,8 @@ TEST_F(GpuRender, SphereMatchesRayCastAndReference) {
   ASSERT_TRUE(ref.ok()) << ref.error().message;
   double worst = 0;
   int compared = 0;
-  for (int v = 0; v < cam.height; v += 2) {
-    for (int u = 0; u < cam.width; u += 2) {
+  for (int v = 0; v < cam.height; v += 5) {
+    for (int u = 0; u < cam.width; u += 5) {
       const float z = out.depth.at(u, v);
       if (z <= 0) continue;
       const auto t = rayModel(pixelRay(cam, T_world_camera, u, v), sphere);
@@ -134,7 +134,7 @@ TEST_F(GpuRender, SphereMatchesRayCastAndReference) {
       ++compared;
     }
   }
-  EXPECT_GT(compared, 5000);
+  EXPECT_GT(compared, 1500);
   EXPECT_LT(worst, 1e-4);
   EXPECT_EQ(silhouetteErrorsBeyondOnePixel(out.depth, ref->depth), 0);
   EXPECT_EQ(silhouetteErrorsBeyondOnePixel(ref->depth, out.depth), 0);
@@ -155,19 +155,17 @@ TEST_F(GpuRender, CheckerboardTextureSamplesLikeReference) {
       for (int c = 0; c < 3; ++c) {
         max_diff = std::max(max_diff, std::abs(int(out.rgba.at(u, v, c)) - int(ref->rgba.at(u, v, c))));
       }
-      // Texel (tx, ty): black when tx + ty is even. Check pixel centres well inside a texel.
-      const double s = (u - cam.cx) / cam.fx * 2.0 / 2.0 + 0.5;  // x = (u - cx) / fx * z, z = 2
+      // Expected colour: bilinear REPEAT lookup with texel centres at (k + 0.5) / 8.
+      const double s = (u - cam.cx) / cam.fx + 0.5;  // x = (u - cx) / fx * z, z = 2, quad 2 m wide
       const double t = (v - cam.cy) / cam.fy * 2.0 / 1.5 + 0.5;
-      const double fs = s * 8 - std::floor(s * 8), ft = t * 8 - std::floor(t * 8);
-      if (fs > 0.3 && fs < 0.7 && ft > 0.3 && ft < 0.7) {
-        const int tx = static_cast<int>(std::floor(s * 8)), ty = static_cast<int>(std::floor(t * 8));
-        const int expected = (tx + ty) % 2 == 0 ? 0 : 255;
-        EXPECT_NEAR(out.rgba.at(u, v, 0), expected, 1) << u << "," << v;
-        ++exact_checked;
-      }
+      if (s < 0.01 || s > 0.99 || t < 0.01 || t > 0.99) continue;
+      const double expected = sampleTextureBilinear(quad.textures[0], s, t)[0];
+      EXPECT_NEAR(out.rgba.at(u, v, 0), expected, 2.0) << u << "," << v;
+      if (std::abs(out.rgba.at(u, v, 0) - expected) > 2.0) return;  // one report is enough
+      ++exact_checked;
     }
   }
-  EXPECT_GT(exact_checked, 1000);
+  EXPECT_GT(exact_checked, 100000);
   // Bilinear weights are 8-bit fixed point on some devices: allow a few levels at texel edges.
   EXPECT_LE(max_diff, 3);
 }
@@ -211,8 +209,8 @@ TEST_F(GpuRender, FrustumCullingSkipsBlocksWithoutChangingTheImage) {
   auto city = makeDemoCity(options);
   Model one_block = city;
   buildBlocks(one_block, 0);
-  ASSERT_GT(city.blocks.size(), 1u);
-  buildBlocks(city, 2000);
+  buildBlocks(city, 300);
+  ASSERT_GT(city.blocks.size(), 4u);
   const PinholeCamera cam{300, 300, 159.5, 119.5, 320, 240};
   const Pose T_world_camera = demoViewpoints("city").front();
   const RenderOutput culled = render(city, cam, T_world_camera);

@@ -275,17 +275,18 @@ TEST(DemoModels, CityTrianglesFaceOutwardAndUp) {
   const Model& m = naturalCity();
   std::string first;
   EXPECT_EQ(countWrongWinding(m, 2.0, 0, &first), 0) << first;
-  // Ground and roofs face up; walls are vertical; only tree crowns and the undersides of cars,
-  // roof-top units and trunks face down.
-  size_t up = 0, down = 0;
+  // By area, ground and roofs face up; only the undersides of tree crowns, cars and roof-top
+  // units face down.
+  double up = 0, down = 0;
   for (uint32_t t = 0; t < m.triangleCount(); ++t) {
     const Vector3d a = vertex(m, m.indices[3 * t]), b = vertex(m, m.indices[3 * t + 1]),
                    c = vertex(m, m.indices[3 * t + 2]);
-    const double nz = (b - a).cross(c - a).normalized().z();
-    up += nz > 0.5;
-    down += nz < -0.5;
+    const Vector3d n = (b - a).cross(c - a);  // Twice the area.
+    up += std::max(0.0, n.z());
+    down += std::max(0.0, -n.z());
   }
-  EXPECT_GT(up, 4 * down);
+  EXPECT_GT(up, 20 * down);
+  EXPECT_NEAR(up / 2, 200.0 * 200.0, 0.05 * 200 * 200);  // The ground's area, seen from above.
 }
 
 TEST(DemoModels, RoomTrianglesFaceIntoTheRoom) {

@@ -415,6 +415,16 @@ Texture roofUnitTexture(int size, uint32_t seed) {
   return c.finish("roof_unit");
 }
 
+/// Parapet: concrete with a metal coping band at the top (v < 0.15); u 4 m per tile.
+Texture parapetTexture(int size, uint32_t seed) {
+  Canvas c(size, Rgb{196, 194, 188}, seed);
+  c.rect(0, 0, 1, 0.14, Rgb{150, 154, 158});
+  c.rect(0, 0.14, 1, 0.17, Rgb{110, 110, 108});
+  for (int i = 0; i < 4; ++i) c.rect(i / 4.0, 0.17, i / 4.0 + 0.008, 1, Rgb{160, 158, 152});
+  c.noise(0.05, 0.12, 4, 4, 1);
+  return c.finish("roof_parapet");
+}
+
 /// Car atlas (paint areas near white, tinted by vertex colour): [0, .5]x[0, .5] body side,
 /// [.5, 1]x[0, .5] body front/back, [0, .5]x[.5, 1] cabin sides, [.5, 1]x[.5, 1] tops.
 Texture carTexture(int size, uint32_t seed) {
@@ -1328,7 +1338,7 @@ const V3 kX{1, 0, 0}, kY{0, 1, 0}, kZ{0, 0, 1}, kNegX{-1, 0, 0}, kNegY{0, -1, 0}
 
 struct CityMaterials {
   int road, crossing, junction, sidewalk, plaza, grass, parking;
-  int roof_membrane, roof_gravel, roof_tiles, roof_unit, car, leaves, bark;
+  int roof_membrane, roof_gravel, roof_tiles, roof_unit, parapet, car, leaves, bark;
   std::array<int, kFacadeStyles.size()> facade;
   std::array<int, kGroundStyles.size()> ground;
 };
@@ -1348,6 +1358,7 @@ CityMaterials addCityMaterials(MeshBuilder& mb, uint32_t seed, int size) {
   m.roof_gravel = mb.addTexturedMaterial(roofTexture(size, ts(), true));
   m.roof_tiles = mb.addTexturedMaterial(roofTilesTexture(size, ts()));
   m.roof_unit = mb.addTexturedMaterial(roofUnitTexture(size, ts()));
+  m.parapet = mb.addTexturedMaterial(parapetTexture(size, ts()));
   m.car = mb.addTexturedMaterial(carTexture(size, ts()));
   m.leaves = mb.addTexturedMaterial(leavesTexture(size, ts()));
   m.bark = mb.addTexturedMaterial(barkTexture(size, ts()));
@@ -1451,12 +1462,18 @@ void addGableRoof(MeshBuilder& mb, const CityMaterials& cm, const Building& b, c
   }
 }
 
+/// The same wall seen from the other side.
+WallSeg reversed(const WallSeg& w) { return {w.bx, w.by, w.ax, w.ay, -w.nx, -w.ny}; }
+
 void addBuilding(MeshBuilder& mb, const CityMaterials& cm, const Building& b, Rng& rng) {
   const FacadeStyle& st = kFacadeStyles[b.style];
   const double fh = st.floor_m;
   const double gf_h = b.gf_top - b.base;
+  constexpr double kParapetH = 0.9, kParapetW = 0.3;
   for (size_t k = 0; k < b.parts.size(); ++k) {
     const Region& fp = b.parts[k];
+    const bool top = k + 1 == b.parts.size();
+    const bool parapet = top && !b.gable;
     const double z0 = k == 0 ? b.base - kSkirt : b.tops[k - 1];
     const double z1 = b.tops[k];
     for (const WallSeg& w : regionOutline(fp)) {
@@ -1472,37 +1489,53 @@ void addBuilding(MeshBuilder& mb, const CityMaterials& cm, const Building& b, Rn
       if (z1 > zs)
         mb.rect(f, 0, zs - z0, len, z1 - z0, UvMap{su, 0, -1 / (2 * fh), (b.gf_top - z0) / (2 * fh)},
                 cm.facade[b.style], b.tint);
+      if (parapet)
+        mb.rect(f, 0, z1 - z0, len, z1 + kParapetH - z0, fitUv(0, z1 - z0, len, z1 + kParapetH - z0, 0, 0, len / 4, 1),
+                cm.parapet, b.tint);
     }
-    const bool top = k + 1 == b.parts.size();
     const Rgba8 roof_tint{b.tint.r, b.tint.r, b.tint.r, 255};
     const int roof_mat = b.gravel ? cm.roof_gravel : cm.roof_membrane;
     if (!top) {
       Region ring = fp;
       ring.exclude.insert(ring.exclude.end(), b.parts[k + 1].include.begin(), b.parts[k + 1].include.end());
       mb.region(horizontalFrame(z1), ring, UvMap{0.1, 0, 0.1, 0}, roof_mat, roof_tint);
-    } else if (b.gable) {
+      continue;
+    }
+    if (b.gable) {
       addGableRoof(mb, cm, b, fp.include[0], z1);
-    } else {
-      mb.region(horizontalFrame(z1), fp, UvMap{0.1, 0, 0.1, 0}, roof_mat, roof_tint);
-      // Roof-top plant units.
-      const Rect bb = fp.bounds();
-      std::vector<Rect> placed;
-      const int units = rng.range(1, 3);
-      for (int attempt = 0; attempt < 12 && static_cast<int>(placed.size()) < units; ++attempt) {
-        const double w = snapHalf(rng.uniform(2, 4.5)), d = snapHalf(rng.uniform(2, 4.5));
-        if (bb.w() < w + 3 || bb.h() < d + 3) continue;
-        const double x0 = snapHalf(rng.uniform(bb.x0 + 1.5, bb.x1 - 1.5 - w));
-        const double y0 = snapHalf(rng.uniform(bb.y0 + 1.5, bb.y1 - 1.5 - d));
-        const Rect r{x0, y0, x0 + w, y0 + d};
-        bool ok = true;
-        for (double x : {r.x0 - 1.0, r.x1 + 1.0})
-          for (double y : {r.y0 - 1.0, r.y1 + 1.0}) ok = ok && fp.contains(x, y);
-        for (const auto& p : placed) ok = ok && !p.overlaps(r, 0.8);
-        if (!ok) continue;
-        placed.push_back(r);
-        const double h = rng.uniform(1.2, 3.0);
-        addBox(mb, {r.x0, r.y0, z1 + kGap}, {r.x1, r.y1, z1 + kGap + h}, allFaces(cm.roof_unit), kWhite);
-      }
+      continue;
+    }
+    // Flat roof inside a parapet: coping ring on top, inner faces towards the roof.
+    Region roof;
+    for (const Rect& r : fp.include)
+      roof.include.push_back({r.x0 + kParapetW, r.y0 + kParapetW, r.x1 - kParapetW, r.y1 - kParapetW});
+    mb.region(horizontalFrame(z1 + kParapetH), Region{fp.include, roof.include}, UvMap{0.25, 0, 0, 0.06},
+              cm.parapet, b.tint);
+    for (const WallSeg& w : regionOutline(roof)) {
+      const WallSeg in = reversed(w);
+      const double len = in.length();
+      mb.rect(wallFrame(in, z1), 0, 0, len, kParapetH, fitUv(0, 0, len, kParapetH, 0, 0, len / 4, 1), cm.parapet,
+              b.tint);
+    }
+    mb.region(horizontalFrame(z1), roof, UvMap{0.1, 0, 0.1, 0}, roof_mat, roof_tint);
+    // Roof-top plant units.
+    const Rect bb = roof.bounds();
+    std::vector<Rect> placed;
+    const int units = rng.range(1, 3);
+    for (int attempt = 0; attempt < 12 && static_cast<int>(placed.size()) < units; ++attempt) {
+      const double w = snapHalf(rng.uniform(2, 4.5)), d = snapHalf(rng.uniform(2, 4.5));
+      if (bb.w() < w + 3 || bb.h() < d + 3) continue;
+      const double x0 = snapHalf(rng.uniform(bb.x0 + 1.5, bb.x1 - 1.5 - w));
+      const double y0 = snapHalf(rng.uniform(bb.y0 + 1.5, bb.y1 - 1.5 - d));
+      const Rect r{x0, y0, x0 + w, y0 + d};
+      bool ok = true;
+      for (double x : {r.x0 - 1.0, r.x1 + 1.0})
+        for (double y : {r.y0 - 1.0, r.y1 + 1.0}) ok = ok && roof.contains(x, y);
+      for (const auto& p : placed) ok = ok && !p.overlaps(r, 0.8);
+      if (!ok) continue;
+      placed.push_back(r);
+      const double h = rng.uniform(1.2, 3.0);
+      addBox(mb, {r.x0, r.y0, z1 + kGap}, {r.x1, r.y1, z1 + kGap + h}, allFaces(cm.roof_unit), kWhite);
     }
   }
 }
@@ -1710,13 +1743,27 @@ Model makeDemoCity(const DemoModelOptions& options) {
         std::vector<std::array<double, 2>> trees;
         const int want = park ? rng.range(8, 14) : rng.range(2, 5);
         for (int attempt = 0; attempt < 60 && static_cast<int>(trees.size()) < want; ++attempt) {
-          const double x = rng.uniform(lot.x0 + 3, lot.x1 - 3), y = rng.uniform(lot.y0 + 3, lot.y1 - 3);
+          const double x = rng.uniform(lot.x0 + 3.5, lot.x1 - 3.5), y = rng.uniform(lot.y0 + 3.5, lot.y1 - 3.5);
           bool ok = clear(Rect{x - 3, y - 3, x + 3, y + 3}, 0.5);
           for (const auto& t : trees) ok = ok && std::hypot(t[0] - x, t[1] - y) > 6.5;
           if (!ok) continue;
           trees.push_back({x, y});
           const double trunk_h = rng.uniform(1.8, 2.8), r = rng.uniform(1.6, 2.8);
           addTree(mb, cm.bark, cm.leaves, x, y, kKerbH, trunk_h, r, 0.15, rng);
+        }
+      }
+      // Street trees on the sidewalks along inner roads, 1 m from the kerb; crowns stay clear
+      // of the buildings (>= 1.5 m into the lot) and above the cars.
+      const bool faces_road[4] = {j > 0, j < 3, i > 0, i < 3};  // South, north, west, east sides.
+      for (int side = 0; side < 4; ++side) {
+        if (!faces_road[side] || !rng.chance(0.6)) continue;
+        const bool along_x = side < 2;
+        const double lo = (along_x ? blk.x0 : blk.y0) + 8, hi = (along_x ? blk.x1 : blk.y1) - 8;
+        const double across = side == 0 ? blk.y0 + 1 : side == 1 ? blk.y1 - 1 : side == 2 ? blk.x0 + 1 : blk.x1 - 1;
+        for (double a = lo; a <= hi; a += rng.uniform(12, 16)) {
+          if (!rng.chance(0.8)) continue;
+          const double trunk_h = rng.uniform(2.4, 3.2), r = rng.uniform(1.4, 2.2);
+          addTree(mb, cm.bark, cm.leaves, along_x ? a : across, along_x ? across : a, kKerbH, trunk_h, r, 0.12, rng);
         }
       }
     }
@@ -1751,7 +1798,7 @@ RoomMaterials addRoomMaterials(MeshBuilder& mb, uint32_t seed, int size) {
   m.frame = mb.addTexturedMaterial(plainTexture(size, ts(), "frame_wood", {92, 62, 40}, 0.05, 0.2, 2, 32));
   m.wood = mb.addTexturedMaterial(plainTexture(size, ts(), "wood", {196, 160, 112}, 0.05, 0.2, 2, 48));
   m.metal = mb.addTexturedMaterial(plainTexture(size, ts(), "metal", {150, 154, 160}, 0.04, 0.06, 4, 4));
-  m.fabric = mb.addTexturedMaterial(plainTexture(size, ts(), "fabric", {200, 200, 200}, 0.25, 0.08, 8, 8));
+  m.fabric = mb.addTexturedMaterial(plainTexture(size, ts(), "fabric", {200, 200, 200}, 0.08, 0.1, 8, 8));
   m.cardboard = mb.addTexturedMaterial(cardboardTexture(size, ts()));
   m.book = mb.addTexturedMaterial(bookTexture(size, ts()));
   m.light = mb.addTexturedMaterial(lightPanelTexture(size, ts()));
@@ -1965,7 +2012,7 @@ std::vector<Pose> demoViewpoints(const std::string& name) {
              {2.4, -1.0, 1.5, -3.0, 0.0, 1.2},
              {-0.5, -1.8, 1.5, -0.8, 2.5, 1.3},
              {-2.0, 1.8, 1.5, -0.2, -2.5, 1.2},
-             {0.5, 2.0, 1.5, 3.0, 1.0, 1.1}};
+             {0.3, 1.9, 1.5, 2.6, -2.2, 0.6}};
   }
   std::vector<Pose> poses;
   for (const View& v : views) {

@@ -50,6 +50,15 @@ std::vector<std::string_view> tokens(std::string_view line) {
   return out;
 }
 
+// `text` for quoting in a message: bytes outside printable ASCII become '?', at most 60 kept.
+std::string quote(std::string_view text) {
+  std::string out(text.substr(0, 60));
+  for (char& c : out) {
+    if (c < 0x20 || c > 0x7e) c = '?';
+  }
+  return text.size() > 60 ? out + "..." : out;
+}
+
 // Calls fn(line_number, line) for every line of `text` (1-based numbers, no line break).
 template <typename Fn>
 bool forEachLine(std::string_view text, Fn&& fn) {
@@ -64,6 +73,22 @@ bool forEachLine(std::string_view text, Fn&& fn) {
 }
 
 // ---- OBJ ------------------------------------------------------------------------------------
+
+// forEachLine for OBJ: like assimp's OBJ parser, a carriage return or form feed also ends a
+// line (the pieces keep the line number of the '\n'-terminated line they are in).
+template <typename Fn>
+void forEachObjLine(std::string_view text, Fn&& fn) {
+  forEachLine(text, [&](size_t line_number, std::string_view line) {
+    size_t start = 0;
+    for (size_t i = 0; i <= line.size(); ++i) {
+      if (i == line.size() || line[i] == '\r' || line[i] == '\f') {
+        if (!fn(line_number, line.substr(start, i - start))) return false;
+        start = i + 1;
+      }
+    }
+    return true;
+  });
+}
 
 // Parses a number as OBJ writes it (optional leading '+'); false if `text` is not one.
 bool parseFloat(std::string_view text, float& value) {
@@ -89,7 +114,7 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
   const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   // Totals first: OBJ readers accept references to elements defined later in the file.
   uint64_t total[3] = {0, 0, 0};  // v, vt, vn
-  forEachLine(text, [&](size_t, std::string_view line) {
+  forEachObjLine(text, [&](size_t, std::string_view line) {
     const auto t = tokens(line);
     if (!t.empty() && t[0] == "v") ++total[0];
     if (!t.empty() && t[0] == "vt") ++total[1];
@@ -102,7 +127,7 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
   uint64_t element = 0, faces = 0;
   Status status;
   const fs::path dir = fs::path(path).parent_path();
-  forEachLine(text, [&](size_t line_number, std::string_view line) {
+  forEachObjLine(text, [&](size_t line_number, std::string_view line) {
     const auto t = tokens(line);
     if (t.empty()) return true;
     if (t[0] == "v") {
@@ -111,7 +136,7 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
         if (t.size() < 4 || !parseFloat(t[1 + k], p[k])) {
           status = fileError(ErrorCode::kMalformedInput, path,
                              fmt::format("vertex {} (line {}) is not 'v x y z': '{}'", seen[0] + 1,
-                                         line_number, oneLine(std::string(line.substr(0, 80)))));
+                                         line_number, quote(line)));
           return false;
         }
       }
@@ -140,6 +165,13 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
     ++element;
     faces += t[0] == "f" ? 1 : 0;
     const char* what = t[0] == "f" ? "face" : t[0] == "l" ? "line" : "point";
+    const size_t needed = t[0] == "f" ? 3 : t[0] == "l" ? 2 : 1;
+    if (t.size() - 1 < needed) {
+      status = fileError(ErrorCode::kMalformedInput, path,
+                         fmt::format("{} {} (line {}) has {} vertices, fewer than {}", what,
+                                     element, line_number, t.size() - 1, needed));
+      return false;
+    }
     for (size_t i = 1; i < t.size(); ++i) {
       std::string_view ref = t[i];
       for (int kind = 0; kind < 3 && !ref.empty(); ++kind) {
@@ -152,7 +184,7 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
         if (ec != std::errc() || end != field.data() + field.size() || index == 0) {
           status = fileError(ErrorCode::kMalformedInput, path,
                              fmt::format("{} {} (line {}) has a malformed vertex reference '{}'",
-                                         what, element, line_number, t[i]));
+                                         what, element, line_number, quote(t[i])));
           return false;
         }
         const int64_t resolved = index > 0 ? index : static_cast<int64_t>(seen[kind]) + index + 1;
@@ -276,7 +308,7 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
     if (t[0] == "format") {
       if (t.size() < 2 || (t[1] != "ascii" && t[1] != "binary_little_endian" &&
                            t[1] != "binary_big_endian")) {
-        return bad("unknown format '" + oneLine(std::string(line)) + "'");
+        return bad("unknown format '" + quote(line) + "'");
       }
       format = std::string(t[1]);
       return true;
@@ -287,7 +319,7 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
       e.name = std::string(t[1]);
       const auto [end, ec] = std::from_chars(t[2].data(), t[2].data() + t[2].size(), e.count);
       if (ec != std::errc() || end != t[2].data() + t[2].size()) {
-        return bad("element count '" + std::string(t[2]) + "' is not a number");
+        return bad("element count '" + quote(t[2]) + "' is not a number");
       }
       elements.push_back(e);
       return true;
@@ -303,7 +335,7 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
         }
       } else if (t.size() == 3) {
         p.type = plyType(t[1]);
-        if (p.type == PlyType::kInvalid) return bad("unknown type '" + std::string(t[1]) + "'");
+        if (p.type == PlyType::kInvalid) return bad("unknown type '" + quote(t[1]) + "'");
       } else {
         return bad("expected 'property <type> <name>' or 'property list <type> <type> <name>'");
       }
@@ -311,7 +343,7 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
       elements.back().properties.push_back(p);
       return true;
     }
-    return bad("unexpected '" + oneLine(std::string(line.substr(0, 80))) + "'");
+    return bad("unexpected '" + quote(line) + "'");
   });
   if (!status.ok()) return status;
   if (data_offset == 0) {

@@ -378,8 +378,12 @@ class GltfReader {
       }
       text = std::string_view(reinterpret_cast<const char*>(&file_[start]), file_.size() - start);
     }
-    root_ = json::parse(text.begin(), text.end(), nullptr, false);
-    if (root_.is_discarded() || !root_.is_object()) fail("invalid glTF JSON");
+    try {
+      root_ = json::parse(text.begin(), text.end());
+    } catch (const json::parse_error& e) {
+      fail(fmt::format("invalid glTF JSON at byte {}", e.byte));
+    }
+    if (!root_.is_object()) fail("glTF JSON is not an object");
   }
 
   void checkAsset() {

@@ -242,7 +242,7 @@ class Rasterizer {
     const double n_norm = n.norm();
     if (!(n_norm > 0) || !std::isfinite(n_norm)) return;  // Degenerate: covers nothing.
     // Orient towards the camera: n . p < 0 on the surface.
-    const Eigen::Vector3f normal = ((plane_d > 0 ? -1.0 : 1.0) / n_norm * n).cast<float>();
+    const Eigen::Vector3f normal = (1.0 / n_norm * n).cast<float>();
 
     // Sutherland-Hodgman against z >= near. A new vertex on an edge is always interpolated
     // from the inside endpoint towards the outside one, so both triangles sharing the edge get
