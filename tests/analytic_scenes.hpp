@@ -7,6 +7,8 @@
 // parameter t is the camera-frame z of the hit, i.e. directly comparable with rendered depth.
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -14,9 +16,6 @@
 #include <limits>
 #include <optional>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 #include "vkloc/camera.hpp"
 #include "vkloc/model.hpp"
@@ -64,8 +63,7 @@ inline void appendQuad(Model& m, const Eigen::Vector3d& corner, const Eigen::Vec
 }
 
 /// A single quad (see appendQuad) with a white untextured material.
-inline Model makeQuad(const Eigen::Vector3d& corner, const Eigen::Vector3d& edge_s,
-                      const Eigen::Vector3d& edge_t) {
+inline Model makeQuad(const Eigen::Vector3d& corner, const Eigen::Vector3d& edge_s, const Eigen::Vector3d& edge_t) {
   Model m;
   m.source = "analytic quad";
   appendQuad(m, corner, edge_s, edge_t);
@@ -75,8 +73,7 @@ inline Model makeQuad(const Eigen::Vector3d& corner, const Eigen::Vector3d& edge
 
 /// Two orthonormal directions (s, t) spanning the plane with unit normal n, with t x s = n.
 inline std::pair<Eigen::Vector3d, Eigen::Vector3d> planeAxes(const Eigen::Vector3d& n) {
-  const Eigen::Vector3d helper =
-      std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d helper = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
   const Eigen::Vector3d s = helper.cross(n).normalized();
   const Eigen::Vector3d t = s.cross(n);  // (s x n) x s = n for unit s orthogonal to n.
   return {s, t};
@@ -131,12 +128,10 @@ inline Model makeUvSphere(const Eigen::Vector3d& center, double radius, int slic
     const double theta = pi * i / stacks;
     for (int j = 0; j <= slices; ++j) {
       const double phi = 2 * pi * (j % slices) / slices;
-      Eigen::Vector3d p(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
-                        std::cos(theta));
+      Eigen::Vector3d p(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
       if (i == 0) p = Eigen::Vector3d(0, 0, 1);
       if (i == stacks) p = Eigen::Vector3d(0, 0, -1);
-      addVertex(m, center + radius * p,
-                {static_cast<double>(j) / slices, static_cast<double>(i) / stacks});
+      addVertex(m, center + radius * p, {static_cast<double>(j) / slices, static_cast<double>(i) / stacks});
     }
   }
   auto id = [&](int i, int j) { return static_cast<uint32_t>(i * (slices + 1) + j); };
@@ -188,8 +183,7 @@ inline Eigen::Vector4d sampleTextureBilinear(const Texture& tex, double s, doubl
   const double fy = std::floor(y);
   auto wrap = [](long k, int n) { return static_cast<int>(((k % n) + n) % n); };
   auto texel = [&](long xi, long yi) {
-    const uint8_t* p =
-        &tex.rgba[(static_cast<size_t>(wrap(yi, tex.height)) * tex.width + wrap(xi, tex.width)) * 4];
+    const uint8_t* p = &tex.rgba[(static_cast<size_t>(wrap(yi, tex.height)) * tex.width + wrap(xi, tex.width)) * 4];
     return Eigen::Vector4d(p[0], p[1], p[2], p[3]);
   };
   const long x0 = static_cast<long>(fx);
@@ -228,8 +222,7 @@ inline Pose cameraLookingAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& t
 }
 
 /// Hit of the plane n . p = n . point, for t > 0.
-inline std::optional<double> rayPlane(const Ray& ray, const Eigen::Vector3d& point,
-                                      const Eigen::Vector3d& normal) {
+inline std::optional<double> rayPlane(const Ray& ray, const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
   const double denom = normal.dot(ray.direction);
   if (denom == 0) return std::nullopt;
   const double t = normal.dot(point - ray.origin) / denom;
@@ -285,22 +278,20 @@ inline std::optional<double> raySphere(const Ray& ray, const Eigen::Vector3d& ce
 
 /// Moller-Trumbore ray-triangle intersection in double, t > 0, either winding. Plain scalar
 /// arithmetic so that it stays fast in unoptimised builds.
-inline std::optional<double> rayTriangle(const Ray& ray, const Eigen::Vector3d& a,
-                                         const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+inline std::optional<double> rayTriangle(const Ray& ray, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                         const Eigen::Vector3d& c) {
   const double* o = ray.origin.data();
   const double* d = ray.direction.data();
   const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  const double pv[3] = {d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2],
-                        d[0] * e2[1] - d[1] * e2[0]};
+  const double pv[3] = {d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2], d[0] * e2[1] - d[1] * e2[0]};
   const double det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
   if (det == 0) return std::nullopt;
   const double inv_det = 1.0 / det;
   const double tv[3] = {o[0] - a[0], o[1] - a[1], o[2] - a[2]};
   const double u = (tv[0] * pv[0] + tv[1] * pv[1] + tv[2] * pv[2]) * inv_det;
   if (u < 0 || u > 1) return std::nullopt;
-  const double qv[3] = {tv[1] * e1[2] - tv[2] * e1[1], tv[2] * e1[0] - tv[0] * e1[2],
-                        tv[0] * e1[1] - tv[1] * e1[0]};
+  const double qv[3] = {tv[1] * e1[2] - tv[2] * e1[1], tv[2] * e1[0] - tv[0] * e1[2], tv[0] * e1[1] - tv[1] * e1[0]};
   const double v = (d[0] * qv[0] + d[1] * qv[1] + d[2] * qv[2]) * inv_det;
   if (v < 0 || u + v > 1) return std::nullopt;
   const double t = (e2[0] * qv[0] + e2[1] * qv[1] + e2[2] * qv[2]) * inv_det;

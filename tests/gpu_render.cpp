@@ -274,5 +274,25 @@ TEST_F(GpuRender, RenderOnGpuMatchesStatistics) {
   EXPECT_TRUE(b->depth.empty());
 }
 
+TEST_F(GpuRender, CopyAndDirectReadbackAgree) {
+  // The staging-copy path (discrete GPUs) and the direct linear-image path (unified memory)
+  // produce identical outputs.
+  auto room = makeDemoModel("room");
+  ASSERT_TRUE(room.ok());
+  GpuRendererOptions copy;
+  copy.direct_readback = false;
+  auto a = GpuRenderer::create(context_, *room, copy);
+  auto b = GpuRenderer::create(context_, *room);
+  ASSERT_TRUE(a.ok() && b.ok());
+  const Pose T = demoViewpoints("room").back();
+  auto ra = (*a)->render(vga(), T);
+  auto rb = (*b)->render(vga(), T);
+  ASSERT_TRUE(ra.ok() && rb.ok());
+  EXPECT_EQ(ra->rgba.data, rb->rgba.data);
+  EXPECT_EQ(ra->gray.data, rb->gray.data);
+  EXPECT_EQ(ra->depth.data, rb->depth.data);
+  EXPECT_EQ(ra->normals.data, rb->normals.data);
+}
+
 }  // namespace
 }  // namespace vkloc::test

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <map>
 #include <cmath>
 #include <set>
 #include <string>
@@ -154,6 +156,9 @@ int countWrongWinding(const Model& m, double cell, int free_parity, std::string*
   return bad;
 }
 
+/// Seeds 1..kExtraSeeds are checked by the property tests.
+constexpr uint32_t kExtraSeeds = 3;
+
 const Model& naturalCity() {
   static const Model m = makeDemoCity();
   return m;
@@ -272,6 +277,12 @@ TEST(DemoModels, MillionTriangleCitySharesTextures) {
 }
 
 TEST(DemoModels, CityTrianglesFaceOutwardAndUp) {
+  for (uint32_t seed = 2; seed <= kExtraSeeds; ++seed) {
+    DemoModelOptions o;
+    o.seed = seed;
+    std::string first;
+    EXPECT_EQ(countWrongWinding(makeDemoCity(o), 2.0, 0, &first), 0) << "seed " << seed << ": " << first;
+  }
   const Model& m = naturalCity();
   std::string first;
   EXPECT_EQ(countWrongWinding(m, 2.0, 0, &first), 0) << first;
@@ -290,9 +301,62 @@ TEST(DemoModels, CityTrianglesFaceOutwardAndUp) {
 }
 
 TEST(DemoModels, RoomTrianglesFaceIntoTheRoom) {
-  const Model& m = naturalRoom();
-  std::string first;
-  EXPECT_EQ(countWrongWinding(m, 0.25, 1, &first), 0) << first;
+  for (uint32_t seed = 1; seed <= kExtraSeeds; ++seed) {
+    DemoModelOptions o;
+    o.seed = seed;
+    std::string first;
+    EXPECT_EQ(countWrongWinding(makeDemoRoom(o), 0.25, 1, &first), 0) << "seed " << seed << ": " << first;
+  }
+}
+
+/// Number of buildings: connected groups of ground-floor wall triangles (buildings stand at
+/// least 3 m apart), joined through shared vertex positions.
+size_t countBuildings(const Model& m) {
+  std::vector<uint32_t> parent(m.vertexCount());
+  for (uint32_t v = 0; v < parent.size(); ++v) parent[v] = v;
+  auto find = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  std::map<std::array<long, 3>, uint32_t> by_position;
+  std::set<uint32_t> walls;
+  for (const DrawRange& r : m.ranges) {
+    if (m.materials[r.material].name.rfind("ground_", 0) != 0) continue;
+    for (uint32_t i = r.first_index; i < r.first_index + r.index_count; ++i) {
+      const uint32_t v = m.indices[i];
+      walls.insert(v);
+      parent[find(v)] = find(m.indices[i - i % 3]);  // Join the triangle's corners.
+      const std::array<long, 3> key{std::lround(m.positions[3 * v] * 100.0), std::lround(m.positions[3 * v + 1] * 100.0),
+                                    std::lround(m.positions[3 * v + 2] * 100.0)};
+      const auto [it, inserted] = by_position.emplace(key, v);
+      if (!inserted) parent[find(v)] = find(it->second);
+    }
+  }
+  std::set<uint32_t> roots;
+  for (uint32_t v : walls) roots.insert(find(v));
+  return roots.size();
+}
+
+TEST(DemoModels, CityHas15To30BuildingsUpTo60Metres) {
+  for (uint32_t seed = 1; seed <= kExtraSeeds; ++seed) {
+    DemoModelOptions o;
+    o.seed = seed;
+    const Model m = seed == 1 ? naturalCity() : makeDemoCity(o);
+    const size_t n = countBuildings(m);
+    EXPECT_GE(n, 15u) << "seed " << seed;
+    EXPECT_LE(n, 30u) << "seed " << seed;
+    EXPECT_LE(m.bounds.max[2], 60.0f) << "seed " << seed;
+    EXPECT_GE(m.bounds.max[2], 40.0f) << "seed " << seed;
+  }
+}
+
+TEST(DemoModels, WindingCheckCatchesFlippedTriangles) {
+  for (const Model* original : {&naturalRoom(), &naturalCity()}) {
+    Model m = *original;
+    for (uint32_t t : {10u, 777u}) std::swap(m.indices[3 * t + 1], m.indices[3 * t + 2]);
+    EXPECT_EQ(countWrongWinding(m, m.source == "demo:city" ? 2.0 : 0.25, m.source == "demo:city" ? 0 : 1, nullptr), 2)
+        << m.source;
+  }
 }
 
 TEST(DemoModels, ViewpointsLookAtTheModel) {

@@ -48,6 +48,8 @@ struct Format {
   bool alpha = true;         ///< Vertex colour alpha survives.
 };
 
+void PrintTo(const Format& f, std::ostream* os) { *os << f.name; }
+
 const Format kFormats[] = {
     {"obj", ".obj", false, false, true, false},  {"ply", ".ply", false, false, false, true},
     {"gltf", ".gltf", false, false, true, true}, {"glb", ".glb", false, false, true, true},
@@ -179,8 +181,8 @@ TEST_P(ModelRoundTrip, ColouredCube) {
   expectRoundTrip(colouredCube(), GetParam(), dir.file(std::string("cube") + GetParam().ext));
 }
 
-INSTANTIATE_TEST_SUITE_P(Formats, ModelRoundTrip, ::testing::ValuesIn(kFormats),
-                         [](const ::testing::TestParamInfo<Format>& info) { return std::string(info.param.name); });
+INSTANTIATE_TEST_SUITE_P(, ModelRoundTrip, ::testing::ValuesIn(kFormats),
+                         [](const ::testing::TestParamInfo<Format>& param_info) { return std::string(param_info.param.name); });
 
 /// The JSON chunk of a GLB file.
 json glbJson(const std::vector<uint8_t>& glb) {
@@ -191,7 +193,7 @@ json glbJson(const std::vector<uint8_t>& glb) {
   return json::parse(glb.begin() + 20, glb.begin() + 20 + header[3]);
 }
 
-TEST(ModelWrite, GltfFollowsTheSpecLayout) {
+TEST(ModelRoundTripFiles, GltfFollowsTheSpecLayout) {
   const Model room = makeDemoRoom();
   test::TempDir dir("vkloc_write");
   for (bool draco : {false, true}) {
@@ -239,7 +241,7 @@ TEST(ModelWrite, GltfFollowsTheSpecLayout) {
   EXPECT_LT(fs::file_size(dir.file("room_draco.glb")), fs::file_size(dir.file("room.glb")));
 }
 
-TEST(ModelWrite, ReplacesFilesWholeAndLeavesNoTemporaries) {
+TEST(ModelRoundTripFiles, ReplacesFilesWholeAndLeavesNoTemporaries) {
   test::TempDir dir("vkloc_write");
   const std::string path = dir.file("cube.ply");
   ASSERT_TRUE(test::writeFile(path, std::string("old content")));
@@ -259,7 +261,7 @@ TEST(ModelWrite, ReplacesFilesWholeAndLeavesNoTemporaries) {
   EXPECT_EQ(entries, 1u);
 }
 
-TEST(ModelWrite, ReportsBadPathsOptionsAndFormats) {
+TEST(ModelRoundTripFiles, ReportsBadPathsOptionsAndFormats) {
   test::TempDir dir("vkloc_write");
   const Model cube = colouredCube();
   const std::string missing_dir = dir.file("no/such/dir/cube.glb");

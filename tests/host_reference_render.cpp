@@ -246,9 +246,8 @@ TEST(ReferenceRender, SphereMatchesRayTriangleAndTrueSphere) {
   const RenderOutput out = renderOk(sphere, cam, T);
 
   const auto ray_cast = test::rayCastDepth(sphere, cam, T);
-  const int mismatches = compareWithAnalytic(out, cam, [&](int i, int j) {
-    return ray_cast[static_cast<size_t>(j) * cam.width + i];
-  });
+  const int mismatches =
+      compareWithAnalytic(out, cam, [&](int i, int j) { return ray_cast[static_cast<size_t>(j) * cam.width + i]; });
   EXPECT_LE(mismatches, 2);
 
   // Every surface point lies between the true sphere and the tessellation's inner bound: a
@@ -357,7 +356,7 @@ TEST(ReferenceRender, TiltedTextureIsPerspectiveCorrect) {
   cam.cx = 160;
   cam.cy = 120;
   const Eigen::Vector3d corner(-1, -0.75, 1.5);
-  const Eigen::Vector3d es(2, 0, 1);   // Recedes to the right.
+  const Eigen::Vector3d es(2, 0, 1);  // Recedes to the right.
   const Eigen::Vector3d et(0, 1.5, 0);
   const Model quad = test::makeCheckerQuad(corner, es, et, 8);
   const RenderOutput out = renderOk(quad, cam, Pose::Identity());
@@ -460,8 +459,8 @@ TEST(ReferenceRender, NearPlaneClipsTriangleCrossingIt) {
   Model tri;
   for (int k = 0; k < 3; ++k) {
     test::addVertex(tri, corners[k]);
-    tri.colors.insert(tri.colors.end(), {uint8_t(k == 0 ? 255 : 0), uint8_t(k == 1 ? 255 : 0),
-                                         uint8_t(k == 2 ? 255 : 0), 255});
+    tri.colors.insert(tri.colors.end(),
+                      {uint8_t(k == 0 ? 255 : 0), uint8_t(k == 1 ? 255 : 0), uint8_t(k == 2 ? 255 : 0), 255});
   }
   tri.indices = {0, 1, 2};
   test::finishSingleBlock(tri);
@@ -552,8 +551,8 @@ struct FanCoverage {
 /// A fan of 16 triangles around the pixel centre `centre` to 16 pixel centres on the square
 /// [8, 56]^2: shared edges through pixel centres (slopes 0, 1/2, 1, 2 and vertical for the
 /// centre (32, 32)). `point(pu, pv)` is the camera-frame point that projects to (pu, pv).
-FanCoverage renderFan(const PinholeCamera& cam, const std::function<Eigen::Vector3d(int, int)>& point,
-                      bool reversed, std::pair<int, int> centre = {32, 32}) {
+FanCoverage renderFan(const PinholeCamera& cam, const std::function<Eigen::Vector3d(int, int)>& point, bool reversed,
+                      std::pair<int, int> centre = {32, 32}) {
   std::vector<std::pair<int, int>> ring;
   for (int k = 0; k < 4; ++k) ring.push_back({8 + 12 * k, 8});
   for (int k = 0; k < 4; ++k) ring.push_back({56, 8 + 12 * k});
@@ -629,9 +628,7 @@ TEST(ReferenceRender, SharedEdgesWithRoundedVerticesAreCoveredOnce) {
   const std::pair<double, double> configs[] = {{3, 61}, {3, 77.7}, {7, 96}, {0.3, 100}, {2.9, 96}};
   for (const auto& [z, f] : configs) {
     const PinholeCamera cam = fanCamera(f);
-    auto point = [z = z, f = f](int pu, int pv) {
-      return Eigen::Vector3d((pu - 32) * z / f, (pv - 32) * z / f, z);
-    };
+    auto point = [z = z, f = f](int pu, int pv) { return Eigen::Vector3d((pu - 32) * z / f, (pv - 32) * z / f, z); };
     for (bool reversed : {false, true}) {
       const FanCoverage fan = renderFan(cam, point, reversed, {31, 33});
       for (int j = 0; j < 64; ++j) {
@@ -655,8 +652,7 @@ TEST(ReferenceRender, EqualDepthKeepsFirstDrawn) {
   const PinholeCamera cam;
   Model model;
   for (int copy = 0; copy < 2; ++copy) {
-    for (const Eigen::Vector3d& p :
-         {Eigen::Vector3d(-1, -1, 3), Eigen::Vector3d(1, -1, 3), Eigen::Vector3d(0, 1, 3)}) {
+    for (const Eigen::Vector3d& p : {Eigen::Vector3d(-1, -1, 3), Eigen::Vector3d(1, -1, 3), Eigen::Vector3d(0, 1, 3)}) {
       model.indices.push_back(test::addVertex(model, p));
       model.colors.insert(model.colors.end(), {static_cast<uint8_t>(copy ? 200 : 100), 0, 0, 255});
     }
@@ -712,8 +708,7 @@ TEST(ReferenceRender, BackFaceCullingKeepsClosedMeshesAndDropsBackFaces) {
 
 TEST(ReferenceRender, InvalidInputsReturnErrors) {
   const BoxScene s;
-  auto expectInvalid = [&](const Model& m, const PinholeCamera& cam, const Pose& T,
-                           const RenderSettings& settings) {
+  auto expectInvalid = [&](const Model& m, const PinholeCamera& cam, const Pose& T, const RenderSettings& settings) {
     Result<RenderOutput> r = renderReference(m, cam, T, settings);
     ASSERT_FALSE(r.ok());
     EXPECT_EQ(r.error().code, ErrorCode::kInvalidArgument);

@@ -410,8 +410,15 @@ Result<engine::Buffer> GpuContext::Impl::createBuffer(VkDeviceSize size, VkBuffe
   return out;
 }
 
+bool GpuContext::Impl::linearSupports(VkFormat format, VkFormatFeatureFlags features) const {
+  VkFormatProperties p{};
+  vkGetPhysicalDeviceFormatProperties(physical, format, &p);
+  return (p.linearTilingFeatures & features) == features;
+}
+
 Result<engine::Image> GpuContext::Impl::createImage(uint32_t width, uint32_t height, VkFormat format,
-                                                    VkImageUsageFlags usage, VkImageAspectFlags aspect) {
+                                                    VkImageUsageFlags usage, VkImageAspectFlags aspect,
+                                                    bool linear_host) {
   engine::Image out;
   out.format = format;
   out.width = width;
@@ -423,7 +430,7 @@ Result<engine::Image> GpuContext::Impl::createImage(uint32_t width, uint32_t hei
   ici.mipLevels = 1;
   ici.arrayLayers = 1;
   ici.samples = VK_SAMPLE_COUNT_1_BIT;
-  ici.tiling = VK_IMAGE_TILING_OPTIMAL;
+  ici.tiling = linear_host ? VK_IMAGE_TILING_LINEAR : VK_IMAGE_TILING_OPTIMAL;
   ici.usage = usage;
   ici.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
   VkImage image = VK_NULL_HANDLE;
@@ -431,8 +438,15 @@ Result<engine::Image> GpuContext::Impl::createImage(uint32_t width, uint32_t hei
   out.image = engine::DeviceHandle<VkImage>(device, image, vkDestroyImage);
   VkMemoryRequirements req{};
   vkGetImageMemoryRequirements(device, image, &req);
-  const int type = findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-  if (type < 0) return makeError(ErrorCode::kGpuError, "no device-local Vulkan memory type for an image");
+  int type = -1;
+  if (linear_host) {
+    const VkMemoryPropertyFlags host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    type = findMemoryType(req.memoryTypeBits, host | VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
+    if (type < 0) type = findMemoryType(req.memoryTypeBits, host);
+  } else {
+    type = findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+  }
+  if (type < 0) return makeError(ErrorCode::kGpuError, "no suitable Vulkan memory type for an image");
   VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   mai.allocationSize = req.size;
   mai.memoryTypeIndex = static_cast<uint32_t>(type);
@@ -440,6 +454,15 @@ Result<engine::Image> GpuContext::Impl::createImage(uint32_t width, uint32_t hei
   VKLOC_VK(vkAllocateMemory(device, &mai, nullptr, &memory));
   out.memory = engine::DeviceHandle<VkDeviceMemory>(device, memory, vkFreeMemory);
   VKLOC_VK(vkBindImageMemory(device, image, memory, 0));
+  if (linear_host) {
+    VkImageSubresource sub{aspect, 0, 0};
+    VkSubresourceLayout layout{};
+    vkGetImageSubresourceLayout(device, image, &sub, &layout);
+    void* base = nullptr;
+    VKLOC_VK(vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &base));
+    out.mapped = static_cast<uint8_t*>(base) + layout.offset;
+    out.row_pitch = layout.rowPitch;
+  }
   VkImageViewCreateInfo vci{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
   vci.image = image;
   vci.viewType = VK_IMAGE_VIEW_TYPE_2D;

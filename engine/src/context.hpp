@@ -40,9 +40,15 @@ struct GpuContext::Impl {
   /// device-local (which is also host-visible on unified memory, and then mapped too).
   Result<engine::Buffer> createBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool host_visible);
 
-  /// Creates a 2D optimal-tiling image with one mip level and a view of it.
+  /// Creates a 2D image with one mip level and a view of it: optimal tiling in device-local
+  /// memory, or (linear_host) linear tiling in host-visible memory, mapped, so the host reads
+  /// it without a copy.
   Result<engine::Image> createImage(uint32_t width, uint32_t height, VkFormat format,
-                                    VkImageUsageFlags usage, VkImageAspectFlags aspect);
+                                    VkImageUsageFlags usage, VkImageAspectFlags aspect,
+                                    bool linear_host = false);
+
+  /// True when `format` supports `features` with linear tiling.
+  bool linearSupports(VkFormat format, VkFormatFeatureFlags features) const;
 
   /// Copies host data into a buffer: directly when mapped, else through a staging buffer.
   Status upload(engine::Buffer& dst, const void* data, VkDeviceSize size);

@@ -86,8 +86,19 @@ struct Targets {
   uint32_t width = 0, height = 0;
   engine::Image color, linear_depth, normals, depth;
   DeviceHandle<VkFramebuffer> framebuffer[2];  // [with normals]
-  Buffer readback;  // rgba8 | float depth | rg16f normals
+  Buffer readback;  // rgba8 | float depth | rg16f normals (copy path only)
 };
+
+// Copies `height` rows of `row_bytes` from a pitched source into a packed destination.
+void copyRows(void* dst, const void* src, size_t row_bytes, size_t pitch, uint32_t height) {
+  auto* d = static_cast<uint8_t*>(dst);
+  const auto* s = static_cast<const uint8_t*>(src);
+  if (pitch == row_bytes) {
+    std::memcpy(d, s, row_bytes * height);
+    return;
+  }
+  for (uint32_t y = 0; y < height; ++y) std::memcpy(d + y * row_bytes, s + y * pitch, row_bytes);
+}
 
 }  // namespace
 
@@ -114,6 +125,9 @@ struct GpuRenderer::Impl {
   std::map<int, DeviceHandle<VkPipeline>> pipelines;  // key: normals | cull << 1
   int texture_count = 1;
 
+  /// Render targets are linear images in host-visible memory that the host reads directly
+  /// (unified memory: lavapipe, integrated GPUs); otherwise they are copied to a buffer.
+  bool direct_readback = false;
   Targets targets;
   VkCommandBuffer cmd = VK_NULL_HANDLE;
   DeviceHandle<VkFence> fence;
@@ -123,7 +137,7 @@ struct GpuRenderer::Impl {
     if (cmd != VK_NULL_HANDLE) vkFreeCommandBuffers(device, ctx->command_pool.get(), 1, &cmd);
   }
 
-  Status init(const Model& model);
+  Status init(const Model& model, const GpuRendererOptions& options);
   Status createRenderPasses();
   Result<VkPipeline> pipeline(bool normals, bool cull);
   Status ensureTargets(uint32_t width, uint32_t height);
@@ -131,9 +145,13 @@ struct GpuRenderer::Impl {
                               const RenderSettings& settings, bool readback);
 };
 
-Status GpuRenderer::Impl::init(const Model& model) {
+Status GpuRenderer::Impl::init(const Model& model, const GpuRendererOptions& options) {
   ctx = &context->impl();
   device = ctx->device;
+  direct_readback = options.direct_readback && ctx->unified_memory;
+  for (VkFormat f : {kColorFormat, kLinearDepthFormat, kNormalFormat}) {
+    direct_readback = direct_readback && ctx->linearSupports(f, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT);
+  }
   VKLOC_TRY_STATUS(validateModel(model));
   ranges = model.ranges;
   blocks = model.blocks;
@@ -283,7 +301,8 @@ Status GpuRenderer::Impl::createRenderPasses() {
       a.stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
       a.stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
       a.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-      a.finalLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
+      // The host reads linear targets in GENERAL layout; the copy path reads optimal ones.
+      a.finalLayout = direct_readback ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
       att.push_back(a);
     };
     color_att(kColorFormat);
@@ -417,8 +436,9 @@ Status GpuRenderer::Impl::ensureTargets(uint32_t width, uint32_t height) {
   targets = Targets{};
   const VkImageUsageFlags color_usage =
       VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
+  bool linear = direct_readback;
   auto mk = [&](engine::Image& dst, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect) -> Status {
-    auto img = ctx->createImage(width, height, format, usage, aspect);
+    auto img = ctx->createImage(width, height, format, usage, aspect, linear);
     if (!img.ok()) return img.error();
     dst = std::move(*img);
     return Status::success();
@@ -426,6 +446,7 @@ Status GpuRenderer::Impl::ensureTargets(uint32_t width, uint32_t height) {
   VKLOC_TRY_STATUS(mk(targets.color, kColorFormat, color_usage, VK_IMAGE_ASPECT_COLOR_BIT));
   VKLOC_TRY_STATUS(mk(targets.linear_depth, kLinearDepthFormat, color_usage, VK_IMAGE_ASPECT_COLOR_BIT));
   VKLOC_TRY_STATUS(mk(targets.normals, kNormalFormat, color_usage, VK_IMAGE_ASPECT_COLOR_BIT));
+  linear = false;  // the depth buffer is never read by the host
   VKLOC_TRY_STATUS(mk(targets.depth, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT));
   for (int with_normals = 0; with_normals < 2; ++with_normals) {
     std::vector<VkImageView> views = {targets.color.view.get(), targets.linear_depth.view.get()};
@@ -442,10 +463,12 @@ Status GpuRenderer::Impl::ensureTargets(uint32_t width, uint32_t height) {
     VKLOC_VK(vkCreateFramebuffer(device, &fci, nullptr, &fb));
     targets.framebuffer[with_normals] = DeviceHandle<VkFramebuffer>(device, fb, vkDestroyFramebuffer);
   }
-  const VkDeviceSize pixels = static_cast<VkDeviceSize>(width) * height;
-  auto rb = ctx->createBuffer(pixels * 12, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
-  if (!rb.ok()) return rb.error();
-  targets.readback = std::move(*rb);
+  if (!direct_readback) {
+    const VkDeviceSize pixels = static_cast<VkDeviceSize>(width) * height;
+    auto rb = ctx->createBuffer(pixels * 12, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
+    if (!rb.ok()) return rb.error();
+    targets.readback = std::move(*rb);
+  }
   targets.width = width;
   targets.height = height;
   return Status::success();
@@ -548,7 +571,13 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
   vkCmdEndRenderPass(cmd);
 
   const VkDeviceSize pixels = static_cast<VkDeviceSize>(w) * h;
-  if (readback) {
+  if (readback && direct_readback) {
+    VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    mb.srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
+    mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0,
+                         nullptr, 0, nullptr);
+  } else if (readback) {
     VkBufferImageCopy region{};
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     region.imageExtent = {w, h, 1};
@@ -573,16 +602,28 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
   VKLOC_TRY_STATUS(ctx->submitAndWait(cmd, fence.get()));
   if (!readback) return out;
 
-  const auto* base = static_cast<const uint8_t*>(targets.readback.mapped);
   const int iw = static_cast<int>(w), ih = static_cast<int>(h);
   out.rgba = ImageU8(iw, ih, 4);
-  std::memcpy(out.rgba.data.data(), base, pixels * 4);
-  out.gray = rgbaToGray(out.rgba);
   out.depth = ImageF32(iw, ih, 1);
-  std::memcpy(out.depth.data.data(), base + pixels * 4, pixels * 4);
+  std::vector<uint16_t> normal_words;
+  const uint16_t* enc = nullptr;
+  if (direct_readback) {
+    copyRows(out.rgba.data.data(), targets.color.mapped, w * 4, targets.color.row_pitch, h);
+    copyRows(out.depth.data.data(), targets.linear_depth.mapped, w * 4, targets.linear_depth.row_pitch, h);
+    if (normals) {
+      normal_words.resize(pixels * 2);
+      copyRows(normal_words.data(), targets.normals.mapped, w * 4, targets.normals.row_pitch, h);
+      enc = normal_words.data();
+    }
+  } else {
+    const auto* base = static_cast<const uint8_t*>(targets.readback.mapped);
+    std::memcpy(out.rgba.data.data(), base, pixels * 4);
+    std::memcpy(out.depth.data.data(), base + pixels * 4, pixels * 4);
+    enc = reinterpret_cast<const uint16_t*>(base + pixels * 8);
+  }
+  out.gray = rgbaToGray(out.rgba);
   if (normals) {
     out.normals = ImageF32(iw, ih, 3, 0.0f);
-    const auto* enc = reinterpret_cast<const uint16_t*>(base + pixels * 8);
     const float* half = halfTable().data();
     for (VkDeviceSize i = 0; i < pixels; ++i) {
       if (out.depth.data[i] == kBackgroundDepth) continue;
@@ -595,11 +636,12 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
 GpuRenderer::GpuRenderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 GpuRenderer::~GpuRenderer() = default;
 
-Result<std::unique_ptr<GpuRenderer>> GpuRenderer::create(std::shared_ptr<GpuContext> context, const Model& model) {
+Result<std::unique_ptr<GpuRenderer>> GpuRenderer::create(std::shared_ptr<GpuContext> context, const Model& model,
+                                                         const GpuRendererOptions& options) {
   if (!context) return makeError(ErrorCode::kInvalidArgument, "GpuRenderer: null context");
   auto impl = std::make_unique<Impl>();
   impl->context = std::move(context);
-  VKLOC_TRY_STATUS(impl->init(model));
+  VKLOC_TRY_STATUS(impl->init(model, options));
   return std::unique_ptr<GpuRenderer>(new GpuRenderer(std::move(impl)));
 }
 

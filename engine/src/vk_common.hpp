@@ -74,6 +74,8 @@ struct Image {
   VkFormat format = VK_FORMAT_UNDEFINED;
   uint32_t width = 0;
   uint32_t height = 0;
+  void* mapped = nullptr;      ///< Linear host-visible images only: the first texel.
+  VkDeviceSize row_pitch = 0;  ///< Linear host-visible images only: bytes between rows.
 };
 
 }  // namespace vkloc::engine

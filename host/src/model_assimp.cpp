@@ -97,6 +97,19 @@ bool parseFloat(std::string_view text, float& value) {
   return ec == std::errc() && end == text.data() + text.size();
 }
 
+// What an OBJ statement keyword declares: 0 a vertex, 1 a texture coordinate, 2 a normal, 3 a
+// face, line or point, -1 something else, -2 none of these although assimp's parser would
+// take it for one (it looks at the first one or two characters only).
+int objStatement(std::string_view keyword) {
+  if (keyword == "v") return 0;
+  if (keyword == "vt") return 1;
+  if (keyword == "vn") return 2;
+  if (keyword == "f" || keyword == "fo" || keyword == "l" || keyword == "p") return 3;
+  const bool lookalike = keyword.substr(0, 2) == "vt" || keyword.substr(0, 2) == "vn" ||
+                         keyword[0] == 'f' || keyword[0] == 'l' || keyword[0] == 'p';
+  return lookalike ? -2 : -1;
+}
+
 // Checks that an OBJ file is text, that vertex positions are finite numbers, that it has faces,
 // and that every face, line and point references existing vertices, texture coordinates and
 // normals (1-based, or negative = relative to the last one defined). Warns about missing
@@ -116,9 +129,8 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
   uint64_t total[3] = {0, 0, 0};  // v, vt, vn
   forEachObjLine(text, [&](size_t, std::string_view line) {
     const auto t = tokens(line);
-    if (!t.empty() && t[0] == "v") ++total[0];
-    if (!t.empty() && t[0] == "vt") ++total[1];
-    if (!t.empty() && t[0] == "vn") ++total[2];
+    const int kind = t.empty() ? -1 : objStatement(t[0]);
+    if (kind >= 0 && kind < 3) ++total[kind];
     return true;
   });
   static const char* const kKinds[3] = {"vertex", "texture coordinate", "normal"};
@@ -129,8 +141,25 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
   const fs::path dir = fs::path(path).parent_path();
   forEachObjLine(text, [&](size_t line_number, std::string_view line) {
     const auto t = tokens(line);
-    if (t.empty()) return true;
-    if (t[0] == "v") {
+    const int statement = t.empty() ? -1 : objStatement(t[0]);
+    if (statement == -2) {
+      status = fileError(ErrorCode::kMalformedInput, path,
+                         fmt::format("line {}: unknown statement '{}'", line_number, quote(t[0])));
+      return false;
+    }
+    if (statement == 1 || statement == 2) {
+      float v = 0;
+      bool numbers = true;
+      for (size_t k = 1; k < t.size(); ++k) numbers = numbers && parseFloat(t[k], v);
+      const size_t count = t.size() - 1;
+      if (!numbers || (statement == 1 ? count < 2 || count > 3 : count != 3)) {
+        status = fileError(ErrorCode::kMalformedInput, path,
+                           fmt::format("line {} is not '{}': '{}'", line_number,
+                                       statement == 1 ? "vt u v [w]" : "vn x y z", quote(line)));
+        return false;
+      }
+    }
+    if (statement == 0) {
       float p[3];
       for (int k = 0; k < 3; ++k) {
         if (t.size() < 4 || !parseFloat(t[1 + k], p[k])) {
@@ -148,9 +177,8 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
       }
       ++seen[0];
     }
-    if (t[0] == "vt") ++seen[1];
-    if (t[0] == "vn") ++seen[2];
-    if (t[0] == "mtllib" && t.size() > 1) {
+    if (statement == 1 || statement == 2) ++seen[statement];
+    if (t.size() > 1 && t[0] == "mtllib") {
       const std::string rest(line.substr(t[1].data() - line.data()));
       std::error_code ec;
       bool found = fs::exists(dir / std::string(oneLine(rest)), ec);
@@ -161,11 +189,12 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
                                                oneLine(rest))));
       }
     }
-    if (t[0] != "f" && t[0] != "l" && t[0] != "p") return true;
+    if (statement != 3) return true;
     ++element;
-    faces += t[0] == "f" ? 1 : 0;
-    const char* what = t[0] == "f" ? "face" : t[0] == "l" ? "line" : "point";
-    const size_t needed = t[0] == "f" ? 3 : t[0] == "l" ? 2 : 1;
+    const char type = t[0][0];
+    faces += type == 'f' ? 1 : 0;
+    const char* what = type == 'f' ? "face" : type == 'l' ? "line" : "point";
+    const size_t needed = type == 'f' ? 3 : type == 'l' ? 2 : 1;
     if (t.size() - 1 < needed) {
       status = fileError(ErrorCode::kMalformedInput, path,
                          fmt::format("{} {} (line {}) has {} vertices, fewer than {}", what,
@@ -234,18 +263,29 @@ struct PlyElement {
   std::vector<PlyProperty> properties;
 };
 
-// Reads the values of a PLY body: whitespace-separated numbers, or binary of either byte order.
+// Reads the values of a PLY body: binary of either byte order, or ASCII with one element
+// instance per line as assimp reads it.
 class PlyReader {
  public:
   PlyReader(std::string_view data, const std::string& format)
       : data_(data), ascii_(format == "ascii"), big_endian_(format == "binary_big_endian") {}
 
-  // The next value; false at the end of the data or at a token that is not a number.
+  // Starts the next element instance: in ASCII files, the next line. False at the end of the
+  // data or at a blank line.
+  bool beginInstance() {
+    if (!ascii_) return true;
+    pos_ = line_end_ == std::string_view::npos ? 0 : line_end_ + 1;
+    if (pos_ >= data_.size()) return false;
+    line_end_ = std::min(data_.find('\n', pos_), data_.size());
+    return data_.substr(pos_, line_end_ - pos_).find_first_not_of(" \t\r") != std::string_view::npos;
+  }
+
+  // The next value of the current instance; false at its end or at a token that is not a number.
   bool next(PlyType type, double& value) {
     if (ascii_) {
-      while (pos_ < data_.size() && (isSpace(data_[pos_]) || data_[pos_] == '\n')) ++pos_;
+      while (pos_ < line_end_ && isSpace(data_[pos_])) ++pos_;
       size_t end = pos_;
-      while (end < data_.size() && !isSpace(data_[end]) && data_[end] != '\n') ++end;
+      while (end < line_end_ && !isSpace(data_[end])) ++end;
       std::string_view token = data_.substr(pos_, end - pos_);
       pos_ = end;
       if (!token.empty() && token[0] == '+') token.remove_prefix(1);
@@ -279,8 +319,21 @@ class PlyReader {
  private:
   std::string_view data_;
   size_t pos_ = 0;
+  size_t line_end_ = std::string_view::npos;  // of the current ASCII line
   bool ascii_, big_endian_;
 };
+
+// True if `text` has only printable ASCII, tabs and line breaks ("\n" or "\r\n"); otherwise
+// `offset` is the first other byte. Assimp's PLY reader treats other control bytes
+// inconsistently, so they are refused.
+bool plainText(std::string_view text, size_t& offset) {
+  for (offset = 0; offset < text.size(); ++offset) {
+    const unsigned char c = static_cast<unsigned char>(text[offset]);
+    const bool crlf = c == '\r' && offset + 1 < text.size() && text[offset + 1] == '\n';
+    if ((c < 0x20 && c != '\t' && c != '\n' && !crlf) || c >= 0x7f) return false;
+  }
+  return true;
+}
 
 // Parses a PLY header, then walks the body: every declared element must be present and
 // numeric, vertex positions finite, and face indices below the vertex count.
@@ -288,6 +341,12 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
   const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   if (text.substr(0, 4) != "ply\n" && text.substr(0, 5) != "ply\r\n") {
     return fileError(ErrorCode::kMalformedInput, path, "not a PLY file (no 'ply' magic line)");
+  }
+  const size_t header_end = text.find("end_header");
+  size_t bad_byte = 0;
+  if (header_end != std::string_view::npos && !plainText(text.substr(0, header_end), bad_byte)) {
+    return fileError(ErrorCode::kMalformedInput, path,
+                     fmt::format("PLY header has a non-text byte at offset {}", bad_byte));
   }
   std::vector<PlyElement> elements;
   std::string format;
@@ -369,37 +428,45 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
   for (const PlyElement& e : elements) {
     counts += fmt::format("{}{} {}", counts.empty() ? "" : ", ", e.count, e.name);
   }
-  PlyReader reader(text.substr(std::min(data_offset, text.size())), format);
+  const std::string_view body = text.substr(std::min(data_offset, text.size()));
+  if (format == "ascii" && !plainText(body, bad_byte)) {
+    return fileError(ErrorCode::kMalformedInput, path,
+                     fmt::format("ASCII PLY has a non-text byte at offset {}",
+                                 data_offset + bad_byte));
+  }
+  PlyReader reader(body, format);
   for (const PlyElement& e : elements) {
     const bool is_vertex = &e == &*vertex;
     const bool is_face = e.name == "face";
     for (uint64_t i = 0; i < e.count; ++i) {
+      const auto truncated = [&](const std::string& property) {
+        return fileError(ErrorCode::kMalformedInput, path,
+                         fmt::format("truncated or non-numeric {} PLY: header declares {} but "
+                                     "{} {} {} cannot be read", format, counts, e.name, i,
+                                     property));
+      };
+      if (!reader.beginInstance()) return truncated("(a line of its own)");
       double xyz[3] = {0, 0, 0};
       for (size_t j = 0; j < e.properties.size(); ++j) {
         const PlyProperty& p = e.properties[j];
-        const auto truncated = [&]() {
-          return fileError(ErrorCode::kMalformedInput, path,
-                           fmt::format("truncated or non-numeric {} PLY: header declares {} but "
-                                       "{} {} property '{}' cannot be read", format, counts,
-                                       e.name, i, p.name));
-        };
+        const auto truncated_property = [&]() { return truncated("property '" + p.name + "'"); };
         double value = 0;
         if (p.count_type == PlyType::kInvalid) {
-          if (!reader.next(p.type, value)) return truncated();
+          if (!reader.next(p.type, value)) return truncated_property();
           for (int k = 0; k < 3; ++k) {
             if (is_vertex && static_cast<int>(j) == position[k]) xyz[k] = value;
           }
           continue;
         }
         double length = 0;
-        if (!reader.next(p.count_type, length)) return truncated();
+        if (!reader.next(p.count_type, length)) return truncated_property();
         if (length < 0 || length != std::floor(length)) {
           return fileError(ErrorCode::kMalformedInput, path,
                            fmt::format("{} {} has a list of {} values", e.name, i, length));
         }
         const bool indices = is_face && (p.name == "vertex_indices" || p.name == "vertex_index");
         for (double k = 0; k < length; ++k) {
-          if (!reader.next(p.type, value)) return truncated();
+          if (!reader.next(p.type, value)) return truncated_property();
           if (indices && !(value >= 0 && value < static_cast<double>(vertex->count))) {
             return fileError(ErrorCode::kMalformedInput, path,
                              fmt::format("face {} references vertex {} but there are {} vertices",

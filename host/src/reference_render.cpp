@@ -30,14 +30,14 @@
 // VK_FRONT_FACE_COUNTER_CLOCKWISE with VK_CULL_MODE_BACK_BIT. Clipping keeps vertex order and
 // all clipped vertices have z >= near > 0, so the test is decided once per triangle from the
 // camera-frame determinant; zero-area (edge-on) triangles cover no pixel either way.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
-
-#include <fmt/format.h>
 
 #include "vkloc/render.hpp"
 
@@ -153,8 +153,7 @@ std::string checkModel(const Model& m) {
   }
   for (size_t r = 0; r < m.ranges.size(); ++r) {
     const DrawRange& dr = m.ranges[r];
-    if (dr.index_count % 3 != 0 ||
-        static_cast<uint64_t>(dr.first_index) + dr.index_count > m.indices.size()) {
+    if (dr.index_count % 3 != 0 || static_cast<uint64_t>(dr.first_index) + dr.index_count > m.indices.size()) {
       return fmt::format("model: draw range {} lies outside the index buffer", r);
     }
     if (!m.materials.empty() && (dr.material < 0 || dr.material >= static_cast<int>(m.materials.size()))) {
@@ -174,8 +173,7 @@ std::string checkModel(const Model& m) {
       return fmt::format("model: material {} uses missing texture {}", k, t);
     }
     const Texture& tex = m.textures[t];
-    if (tex.width <= 0 || tex.height <= 0 ||
-        tex.rgba.size() != static_cast<size_t>(tex.width) * tex.height * 4) {
+    if (tex.width <= 0 || tex.height <= 0 || tex.rgba.size() != static_cast<size_t>(tex.width) * tex.height * 4) {
       return fmt::format("model: texture {} ('{}') has inconsistent size", t, tex.name);
     }
   }
@@ -187,14 +185,15 @@ class Rasterizer {
  public:
   Rasterizer(const Model& model, const PinholeCamera& camera, const RenderSettings& settings,
              const Pose& T_camera_world, RenderOutput& out)
-      : model_(model), cam_(camera), settings_(settings), out_(out),
-        depth_(static_cast<size_t>(camera.width) * camera.height,
-               std::numeric_limits<double>::infinity()) {
+      : model_(model),
+        cam_(camera),
+        settings_(settings),
+        out_(out),
+        depth_(static_cast<size_t>(camera.width) * camera.height, std::numeric_limits<double>::infinity()) {
     const size_t nv = model.vertexCount();
     p_camera_.resize(nv);
     for (size_t i = 0; i < nv; ++i) {
-      const Eigen::Vector3d p(model.positions[3 * i], model.positions[3 * i + 1],
-                              model.positions[3 * i + 2]);
+      const Eigen::Vector3d p(model.positions[3 * i], model.positions[3 * i + 1], model.positions[3 * i + 2]);
       p_camera_[i] = T_camera_world * p;
     }
   }
@@ -202,8 +201,7 @@ class Rasterizer {
   /// Draws triangles [first, first + count) of the index buffer with one material.
   void drawRange(uint32_t first_index, uint32_t index_count, const Material& material) {
     const Texture* tex = material.texture >= 0 ? &model_.textures[material.texture] : nullptr;
-    const std::array<double, 3> base = {material.base_color[0], material.base_color[1],
-                                        material.base_color[2]};
+    const std::array<double, 3> base = {material.base_color[0], material.base_color[1], material.base_color[2]};
     for (uint32_t k = 0; k + 3 <= index_count; k += 3) {
       const uint32_t* t = &model_.indices[first_index + k];
       drawTriangle(t[0], t[1], t[2], tex, base);
@@ -226,14 +224,12 @@ class Rasterizer {
       c.attribute[1] = model_.uvs[2 * static_cast<size_t>(index) + 1];
     }
     for (int ch = 0; ch < 3; ++ch) {
-      c.attribute[2 + ch] =
-          model_.colors.empty() ? 1.0 : model_.colors[4 * static_cast<size_t>(index) + ch] / 255.0;
+      c.attribute[2 + ch] = model_.colors.empty() ? 1.0 : model_.colors[4 * static_cast<size_t>(index) + ch] / 255.0;
     }
     return c;
   }
 
-  void drawTriangle(uint32_t ia, uint32_t ib, uint32_t ic, const Texture* tex,
-                    const std::array<double, 3>& base) {
+  void drawTriangle(uint32_t ia, uint32_t ib, uint32_t ic, const Texture* tex, const std::array<double, 3>& base) {
     const ClipVertex tri[3] = {vertex(ia), vertex(ib), vertex(ic)};
     // Face normal and plane (camera frame) of the whole triangle; see the file comment.
     const Eigen::Vector3d n = (tri[1].p - tri[0].p).cross(tri[2].p - tri[0].p);
@@ -242,7 +238,7 @@ class Rasterizer {
     const double n_norm = n.norm();
     if (!(n_norm > 0) || !std::isfinite(n_norm)) return;  // Degenerate: covers nothing.
     // Orient towards the camera: n . p < 0 on the surface.
-    const Eigen::Vector3f normal = (1.0 / n_norm * n).cast<float>();
+    const Eigen::Vector3f normal = ((plane_d > 0 ? -1.0 : 1.0) / n_norm * n).cast<float>();
 
     // Sutherland-Hodgman against z >= near. A new vertex on an edge is always interpolated
     // from the inside endpoint towards the outside one, so both triangles sharing the edge get
@@ -276,9 +272,8 @@ class Rasterizer {
   }
 
   /// Rasterizes one triangle with all vertices at z >= near.
-  void rasterize(const ClipVertex& a, const ClipVertex& b, const ClipVertex& c,
-                 const Eigen::Vector3d& plane_n, double plane_d, const Eigen::Vector3f& normal,
-                 const Texture* tex, const std::array<double, 3>& base) {
+  void rasterize(const ClipVertex& a, const ClipVertex& b, const ClipVertex& c, const Eigen::Vector3d& plane_n,
+                 double plane_d, const Eigen::Vector3f& normal, const Texture* tex, const std::array<double, 3>& base) {
     const ClipVertex* corner[3] = {&a, &b, &c};
     ScreenVertex s[3];
     double inv_z[3];
@@ -292,8 +287,7 @@ class Rasterizer {
     const double area = signedArea(s[0], s[1], s[2]);
     if (area == 0 || !std::isfinite(area)) return;
     // Edge k is opposite corner k; its value is corner k's (unnormalised) barycentric.
-    const Edge edge[3] = {makeEdge(s[1], s[2], area), makeEdge(s[2], s[0], area),
-                          makeEdge(s[0], s[1], area)};
+    const Edge edge[3] = {makeEdge(s[1], s[2], area), makeEdge(s[2], s[0], area), makeEdge(s[0], s[1], area)};
 
     const double u_min = std::min({s[0].u, s[1].u, s[2].u});
     const double u_max = std::max({s[0].u, s[1].u, s[2].u});
@@ -366,21 +360,19 @@ class Rasterizer {
 
 }  // namespace
 
-Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& camera,
-                                     const Pose& T_world_camera, const RenderSettings& settings) {
+Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& camera, const Pose& T_world_camera,
+                                     const RenderSettings& settings) {
   if (Status valid = validateCamera(camera); !valid.ok()) return valid.error();
   if (!isValidPose(T_world_camera)) {
-    return makeError(ErrorCode::kInvalidArgument,
-                     "renderReference: T_world_camera is not a finite rigid transform");
+    return makeError(ErrorCode::kInvalidArgument, "renderReference: T_world_camera is not a finite rigid transform");
   }
   if (!std::isfinite(settings.near_m) || !(settings.near_m > 0)) {
     return makeError(ErrorCode::kInvalidArgument,
                      fmt::format("renderReference: near_m = {} must be positive", settings.near_m));
   }
   if (!(settings.far_m > settings.near_m)) {
-    return makeError(ErrorCode::kInvalidArgument,
-                     fmt::format("renderReference: far_m = {} must exceed near_m = {}",
-                                 settings.far_m, settings.near_m));
+    return makeError(ErrorCode::kInvalidArgument, fmt::format("renderReference: far_m = {} must exceed near_m = {}",
+                                                              settings.far_m, settings.near_m));
   }
   if (std::string problem = checkModel(model); !problem.empty()) {
     return makeError(ErrorCode::kInvalidArgument, problem);

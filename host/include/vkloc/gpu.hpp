@@ -61,6 +61,14 @@ class GpuContext {
   std::unique_ptr<Impl> impl_;
 };
 
+/// How a GpuRenderer keeps its render targets.
+struct GpuRendererOptions {
+  /// On devices whose memory the host can read directly (lavapipe, integrated GPUs), render
+  /// into linear host-visible images and read them without a copy. false always copies to a
+  /// staging buffer, as on discrete GPUs.
+  bool direct_readback = true;
+};
+
 /// Renders one model with Vulkan. Model data is uploaded once at creation; render targets are
 /// (re)allocated when the camera size changes.
 class GpuRenderer {
@@ -68,7 +76,8 @@ class GpuRenderer {
   /// Uploads the model (vertices, indices, textures). kInvalidArgument for an invalid model,
   /// kGpuError when the device runs out of memory.
   static Result<std::unique_ptr<GpuRenderer>> create(std::shared_ptr<GpuContext> context,
-                                                     const Model& model);
+                                                     const Model& model,
+                                                     const GpuRendererOptions& options = {});
   ~GpuRenderer();
 
   /// Renders the model at T_world_camera and reads the requested outputs back to the host.
