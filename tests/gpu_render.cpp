@@ -274,6 +274,46 @@ TEST_F(GpuRender, RenderOnGpuMatchesStatistics) {
   EXPECT_TRUE(b->depth.empty());
 }
 
+TEST_F(GpuRender, LevelOfDetailStaysWithinItsPixelErrorBound) {
+  // An enlarged city whose subdivided faces are made rough, seen from far away: level of
+  // detail draws fewer triangles and the depth map stays close to the full-detail one.
+  DemoModelOptions options;
+  options.target_triangles = 60000;
+  Model city = makeDemoCity(options);
+  for (size_t i = 0; i < city.positions.size(); ++i) {
+    city.positions[i] += 0.02f * static_cast<float>(std::sin(1.7 * city.positions[(i / 3) * 3] + 3.1 * (i % 3)));
+  }
+  buildBlocks(city, 4096);
+  auto renderer = GpuRenderer::create(context_, city);
+  GpuRendererOptions no_lod_options;
+  no_lod_options.lod_levels = 0;
+  auto no_lod = GpuRenderer::create(context_, city, no_lod_options);
+  ASSERT_TRUE(renderer.ok() && no_lod.ok());
+  const PinholeCamera cam = vga();
+  auto T = lookAt({-200, -200, 230}, {0, 0, 0});
+  ASSERT_TRUE(T.ok());
+  RenderSettings exact;
+  RenderSettings lod;
+  lod.lod_pixel_error = 0.5;
+  auto full = (*renderer)->render(cam, *T, exact);
+  auto full_no_levels = (*no_lod)->render(cam, *T, exact);
+  auto reduced = (*renderer)->render(cam, *T, lod);
+  ASSERT_TRUE(full.ok() && full_no_levels.ok() && reduced.ok());
+  EXPECT_EQ(full->depth.data, full_no_levels->depth.data);  // lod_pixel_error 0: full detail
+  EXPECT_LT(reduced->triangles_drawn, full->triangles_drawn * 3 / 4);
+  int both = 0, close = 0, coverage_diff = 0;
+  for (size_t i = 0; i < full->depth.data.size(); ++i) {
+    const float a = full->depth.data[i], b = reduced->depth.data[i];
+    coverage_diff += (a > 0) != (b > 0);
+    if (a <= 0 || b <= 0) continue;
+    ++both;
+    // 0.5 px at ~350 m is ~0.35 m of surface error along the view ray at most.
+    close += std::abs(a - b) < 0.5f;
+  }
+  EXPECT_GT(close, both * 97 / 100);
+  EXPECT_LT(coverage_diff, static_cast<int>(full->depth.data.size() / 200));
+}
+
 TEST_F(GpuRender, CopyAndDirectReadbackAgree) {
   // The staging-copy path (discrete GPUs) and the direct linear-image path (unified memory)
   // produce identical outputs.

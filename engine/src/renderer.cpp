@@ -9,6 +9,7 @@
 #include <meshoptimizer.h>
 
 #include "context.hpp"
+#include "lod.hpp"
 #include "render_layout.h"
 #include "shader_registry.hpp"
 #include "vkloc/gpu.hpp"
@@ -108,8 +109,7 @@ struct GpuRenderer::Impl {
   VkDevice device = VK_NULL_HANDLE;
 
   // Model data.
-  std::vector<DrawRange> ranges;
-  std::vector<Block> blocks;
+  engine::LodModel lod;  // per-block draws at full and reduced detail
   std::vector<Material> materials;
   std::vector<bool> texture_ok;
   std::array<double, 3> origin{0, 0, 0};  // world frame, metres; vertices are stored relative to it
@@ -153,8 +153,6 @@ Status GpuRenderer::Impl::init(const Model& model, const GpuRendererOptions& opt
     direct_readback = direct_readback && ctx->linearSupports(f, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT);
   }
   VKLOC_TRY_STATUS(validateModel(model));
-  ranges = model.ranges;
-  blocks = model.blocks;
   materials = model.materials;
 
   // Vertices relative to the model's centre keep float precision for large world coordinates.
@@ -185,14 +183,10 @@ Status GpuRenderer::Impl::init(const Model& model, const GpuRendererOptions& opt
   };
   VKLOC_TRY_STATUS(make(positions, rel.data(), rel.size() * sizeof(float), vb));
   VKLOC_TRY_STATUS(make(attributes, attrs.data(), attrs.size() * sizeof(VertexAttributes), vb));
-  // Reorder triangles inside each draw range for the post-transform vertex cache (fewer vertex
-  // shader invocations); the set of triangles per range is unchanged.
-  std::vector<uint32_t> ordered(model.indices.size());
-  for (const DrawRange& r : model.ranges) {
-    meshopt_optimizeVertexCache(ordered.data() + r.first_index, model.indices.data() + r.first_index, r.index_count,
-                                nv);
-  }
-  VKLOC_TRY_STATUS(make(indices, ordered.data(), ordered.size() * sizeof(uint32_t),
+  // Full-detail triangles reordered inside each draw range for the post-transform vertex cache
+  // (fewer vertex shader invocations), then the simplified levels of every block.
+  lod = engine::buildLodModel(model, options.lod_levels);
+  VKLOC_TRY_STATUS(make(indices, lod.indices.data(), lod.indices.size() * sizeof(uint32_t),
                         VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT));
 
   // Textures (a 1x1 white one when the model has none, so the descriptor array is never empty).
@@ -490,24 +484,31 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
   auto pipe = pipeline(normals, settings.cull_back_faces);
   if (!pipe.ok()) return pipe.error();
 
-  // Block frustum culling on the host, then merge adjacent ranges of one material into draws.
+  // Block frustum culling and level-of-detail choice on the host, then adjacent draws of one
+  // material are merged.
   RenderOutput out;
   struct Draw {
     uint32_t first, count;
     int material;
   };
   std::vector<Draw> draws;
-  for (const Block& b : blocks) {
+  const double eye[3] = {T_world_camera.translation().x(), T_world_camera.translation().y(),
+                         T_world_camera.translation().z()};
+  const double focal = std::max(camera.fx, camera.fy);
+  for (const engine::LodBlock& b : lod.blocks) {
     if (!aabbInFrustum(b.bounds, camera, T_world_camera, settings.near_m, settings.far_m)) continue;
+    const int level_index =
+        engine::selectLodLevel(b, engine::distanceToBox(b.bounds, eye), focal, settings.lod_pixel_error);
+    const engine::LodLevel& level = b.levels[static_cast<size_t>(level_index)];
     ++out.blocks_drawn;
-    out.triangles_drawn += b.triangle_count;
-    for (uint32_t r = b.first_range; r < b.first_range + b.range_count; ++r) {
-      const DrawRange& range = ranges[r];
-      if (!draws.empty() && draws.back().material == range.material &&
-          draws.back().first + draws.back().count == range.first_index) {
-        draws.back().count += range.index_count;
+    out.triangles_drawn += level.triangles;
+    for (uint32_t d = level.first_draw; d < level.first_draw + level.draw_count; ++d) {
+      const engine::LodDraw& ld = lod.draws[d];
+      if (!draws.empty() && draws.back().material == ld.material &&
+          draws.back().first + draws.back().count == ld.first_index) {
+        draws.back().count += ld.index_count;
       } else {
-        draws.push_back({range.first_index, range.index_count, range.material});
+        draws.push_back({ld.first_index, ld.index_count, ld.material});
       }
     }
   }

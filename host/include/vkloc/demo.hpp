@@ -13,7 +13,9 @@ namespace vkloc {
 
 /// How a demo model is generated.
 struct DemoModelOptions {
-  uint32_t seed = 1;              ///< Same seed -> bit-identical model; another seed varies layout and textures.
+  /// Same seed -> bit-identical model (for a given build); another seed varies the layout,
+  /// sizes, colours and texture details.
+  uint32_t seed = 1;
   /// 0 = natural size; otherwise axis-aligned walls, roofs and ground are split on a world grid
   /// (so neighbouring faces stay crack-free) whose spacing is chosen to bring the total triangle
   /// count within +-10% of this. Targets below the natural size give the natural model.

@@ -67,6 +67,9 @@ struct GpuRendererOptions {
   /// into linear host-visible images and read them without a copy. false always copies to a
   /// staging buffer, as on discrete GPUs.
   bool direct_readback = true;
+  /// Simplified levels built per block at creation (each ~1/4 of the previous triangles; see
+  /// RenderSettings::lod_pixel_error). 0 builds none.
+  int lod_levels = 4;
 };
 
 /// Renders one model with Vulkan. Model data is uploaded once at creation; render targets are

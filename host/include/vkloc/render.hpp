@@ -26,6 +26,11 @@ struct RenderSettings {
   std::array<uint8_t, 4> background_rgba{0, 0, 0, 0};
   bool cull_back_faces = false;  ///< Skip triangles seen from behind (needs consistent winding).
   uint32_t outputs = kRenderAll; ///< RenderOutputFlags to fill.
+  /// Level of detail: blocks far enough away are drawn simplified when the simplification's
+  /// geometric error projects to at most this many pixels (errors measured at block creation,
+  /// projected from the nearest point of the block's bounds). 0 always draws full detail. The
+  /// CPU reference ignores it.
+  double lod_pixel_error = 0.0;
 };
 
 /// Depth value of pixels where no surface is seen (metres).
