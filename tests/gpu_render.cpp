@@ -5,7 +5,9 @@
 
 #include "analytic_scenes.hpp"
 #include "gpu_test_support.hpp"
+#include "test_support.hpp"
 #include "vkloc/demo.hpp"
+#include "vkloc/model_write.hpp"
 
 namespace vkloc::test {
 namespace {
@@ -312,6 +314,53 @@ TEST_F(GpuRender, LevelOfDetailStaysWithinItsPixelErrorBound) {
   }
   EXPECT_GT(close, both * 97 / 100);
   EXPECT_LT(coverage_diff, static_cast<int>(full->depth.data.size() / 200));
+}
+
+TEST_F(GpuRender, DracoEncodedModelRendersLikeItsSource) {
+  // The demo room written as Draco (standalone .drc and glTF with KHR_draco_mesh_compression),
+  // loaded back and rendered: depth within the quantization step, same colours.
+  auto room = makeDemoModel("room");
+  ASSERT_TRUE(room.ok());
+  TempDir dir("vkloc_draco");
+  const PinholeCamera cam{450, 450, 159.5, 119.5, 320, 240};
+  const Pose T = demoViewpoints("room").front();
+  auto source = GpuRenderer::create(context_, *room);
+  ASSERT_TRUE(source.ok());
+  auto expected = (*source)->render(cam, T);
+  ASSERT_TRUE(expected.ok());
+  ModelWriteOptions options;
+  options.draco = true;
+  options.draco_position_bits = 16;
+  for (const char* name : {"room.glb", "room.drc"}) {
+    ASSERT_TRUE(saveModel(*room, dir.file(name), options).ok()) << name;
+    auto loaded = loadModel(dir.file(name));
+    ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+    auto renderer = GpuRenderer::create(context_, *loaded);
+    ASSERT_TRUE(renderer.ok());
+    auto out = (*renderer)->render(cam, T);
+    ASSERT_TRUE(out.ok());
+    // Quantization step: largest bounds extent / 2^bits (about 0.1 mm here).
+    double extent = 0;
+    for (int k = 0; k < 3; ++k) extent = std::max<double>(extent, room->bounds.max[k] - room->bounds.min[k]);
+    const double step = extent / (1 << options.draco_position_bits);
+    int both = 0, within = 0, colour_close = 0;
+    for (size_t i = 0; i < out->depth.data.size(); ++i) {
+      const float a = expected->depth.data[i], b = out->depth.data[i];
+      if (a <= 0 || b <= 0) continue;
+      ++both;
+      within += std::abs(a - b) <= 4 * step + 1e-5 * a;
+      int diff = 0;
+      for (int c = 0; c < 3; ++c) diff = std::max(diff, std::abs(int(expected->rgba.data[i * 4 + c]) - int(out->rgba.data[i * 4 + c])));
+      colour_close += diff <= 12;
+    }
+    EXPECT_GT(both, static_cast<int>(out->depth.data.size() * 9 / 10)) << name;
+    // Pixels on depth edges may see another surface after quantization: a few are allowed.
+    EXPECT_GT(within, both * 99 / 100) << name;
+    if (std::string(name) == "room.glb") {  // .drc carries no materials or textures
+      EXPECT_GT(colour_close, both * 98 / 100) << name;
+    }
+    EXPECT_EQ(silhouetteErrorsBeyondOnePixel(out->depth, expected->depth), 0) << name;
+  }
 }
 
 TEST_F(GpuRender, CopyAndDirectReadbackAgree) {
