@@ -1,23 +1,27 @@
 // Model loading, validation, placement and blocking: every format on small hand-made files,
 // the error cases, and truncated / random / corrupted versions of each format.
-#include <algorithm>
-#include <array>
-#include <cmath>
-#include <cstring>
-#include <filesystem>
-#include <functional>
-#include <random>
-#include <string>
-#include <tuple>
-#include <vector>
-
+#include <assimp/material.h>
+#include <assimp/scene.h>
 #include <draco/compression/encode.h>
 #include <draco/mesh/triangle_soup_mesh_builder.h>
 #include <draco/point_cloud/point_cloud_builder.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <random>
+#include <string>
+#include <vector>
 
 #include "test_support.hpp"
 #include "vkloc/model.hpp"
@@ -77,8 +81,8 @@ void expectQuad(const Model& model, const std::array<float, 3>& offset, bool uvs
   EXPECT_EQ(model.uvs.empty(), !uvs);
   EXPECT_EQ(model.colors.empty(), !colors);
   for (int v = 0; v < 4; ++v) {
-    const int i = findVertex(model, kQuadPositions[v][0] + offset[0],
-                             kQuadPositions[v][1] + offset[1], kQuadPositions[v][2] + offset[2]);
+    const int i = findVertex(model, kQuadPositions[v][0] + offset[0], kQuadPositions[v][1] + offset[1],
+                             kQuadPositions[v][2] + offset[2]);
     ASSERT_GE(i, 0) << "vertex " << v;
     if (uvs) {
       EXPECT_NEAR(model.uvs[2 * i], kQuadUvs[v][0], 1e-3) << "vertex " << v;
@@ -141,10 +145,10 @@ std::string quadObj(const std::string& mtllib = "quad.mtl") {
 }
 
 std::string plyHeader(const std::string& format, bool colors) {
-  return "ply\nformat " + format + " 1.0\ncomment test quad\nelement vertex 4\n"
-         "property float x\nproperty float y\nproperty float z\n" +
-         std::string(colors ? "property uchar red\nproperty uchar green\nproperty uchar blue\n"
-                              "property uchar alpha\n" : "") +
+  return "ply\nformat " + format +
+         " 1.0\ncomment test quad\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n" +
+         std::string(colors ? "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n"
+                            : "") +
          "element face 2\nproperty list uchar int vertex_indices\nend_header\n";
 }
 
@@ -179,8 +183,12 @@ Bytes quadPlyBinary(float first_x = 0.0f, uint32_t last_index = 3) {
 // normalized ubyte (80, 16), ushort indices (96, 12).
 Bytes quadBuffer() {
   Bytes out;
-  for (const auto& p : kQuadPositions) for (float x : p) putFloat(out, x);
-  for (const auto& t : kQuadUvs) for (float x : t) putFloat(out, x);
+  for (const auto& p : kQuadPositions) {
+    for (float x : p) putFloat(out, x);
+  }
+  for (const auto& t : kQuadUvs) {
+    for (float x : t) putFloat(out, x);
+  }
   for (const auto& c : kQuadColors) out.insert(out.end(), c, c + 4);
   for (uint32_t i : kQuadIndices) putU16(out, static_cast<uint16_t>(i));
   return out;
@@ -234,9 +242,9 @@ Bytes quadGlb() {
   const Bytes png = pngBytes();
   const size_t png_offset = bin.size();
   bin.insert(bin.end(), png.begin(), png.end());
-  const std::string json = quadGltfJson(
-      fmt::format(R"({{"byteLength":{}}})", bin.size()), R"({"bufferView":4,"mimeType":"image/png"})",
-      fmt::format(R"(,{{"buffer":0,"byteOffset":{},"byteLength":{}}})", png_offset, png.size()));
+  const std::string json =
+      quadGltfJson(fmt::format(R"({{"byteLength":{}}})", bin.size()), R"({"bufferView":4,"mimeType":"image/png"})",
+                   fmt::format(R"(,{{"buffer":0,"byteOffset":{},"byteLength":{}}})", png_offset, png.size()));
   return packGlb(json, bin);
 }
 
@@ -267,7 +275,8 @@ DracoQuad encodeDracoQuad(float z, int method, bool flip_v) {
     const uint32_t* c = &kQuadIndices[3 * f];
     builder.SetAttributeValuesForFace(pos, draco::FaceIndex(f), p[c[0]], p[c[1]], p[c[2]]);
     builder.SetAttributeValuesForFace(uv, draco::FaceIndex(f), t[c[0]], t[c[1]], t[c[2]]);
-    builder.SetAttributeValuesForFace(col, draco::FaceIndex(f), kQuadColors[c[0]], kQuadColors[c[1]], kQuadColors[c[2]]);
+    builder.SetAttributeValuesForFace(col, draco::FaceIndex(f), kQuadColors[c[0]], kQuadColors[c[1]],
+                                      kQuadColors[c[2]]);
   }
   std::unique_ptr<draco::Mesh> mesh = builder.Finalize();
   draco::Encoder encoder;
@@ -307,15 +316,14 @@ Bytes mixedDracoGlb() {
  {{"componentType":5126,"count":4,"type":"VEC2"}},
  {{"componentType":5121,"normalized":true,"count":4,"type":"VEC4"}},
  {{"componentType":5123,"count":6,"type":"SCALAR"}}]}})",
-                                       draco.position_id, draco.uv_id, draco.color_id, bin.size(),
-                                       quadViewsJson(0), draco_offset, draco.bytes.size(), kQuadAccessorsJson);
+                                       draco.position_id, draco.uv_id, draco.color_id, bin.size(), quadViewsJson(0),
+                                       draco_offset, draco.bytes.size(), kQuadAccessorsJson);
   return packGlb(json, bin);
 }
 
 // ---- helpers for error checks -------------------------------------------------------------------
 
-void expectError(const Result<Model>& result, ErrorCode code, const std::string& path,
-                 const std::string& text) {
+void expectError(const Result<Model>& result, ErrorCode code, const std::string& path, const std::string& text) {
   ASSERT_FALSE(result.ok()) << path;
   EXPECT_EQ(result.error().code, code) << result.error().message;
   EXPECT_EQ(result.error().message.rfind(path + ": ", 0), 0u) << result.error().message;
@@ -397,9 +405,10 @@ TEST(ModelIo, LoadsPlyWithVertexColors) {
 TEST(ModelIo, LoadsGltfWithEmbeddedData) {
   TempDir dir("modelio");
   const Bytes buffer = quadBuffer();
-  const std::string json = quadGltfJson(
-      fmt::format(R"({{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}})", buffer.size(), base64(buffer)),
-      fmt::format(R"({{"uri":"data:image/png;base64,{}"}})", base64(pngBytes())));
+  const std::string json =
+      quadGltfJson(fmt::format(R"({{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}})", buffer.size(),
+                               base64(buffer)),
+                   fmt::format(R"({{"uri":"data:image/png;base64,{}"}})", base64(pngBytes())));
   ASSERT_TRUE(writeFile(dir.file("quad.gltf"), json));
   std::vector<std::string> warnings;
   auto model = loadModel(dir.file("quad.gltf"), {}, &warnings);
@@ -449,6 +458,35 @@ TEST(ModelIo, LoadsGlb) {
   expectQuad(*model, {10, 0, 0}, true, true);
   ASSERT_EQ(model->textures.size(), 1u);
   expectTestTexture(model->textures[0]);
+}
+
+TEST(ModelIo, LoadsOtherAssimpFormatsWithEmbeddedTextures) {
+  // The quad GLB converted by assimp to its own binary format, once with the PNG embedded as
+  // is and once as raw texels: both reach loadModel as embedded texture "*0".
+  TempDir dir("modelio");
+  ASSERT_TRUE(writeFile(dir.file("quad.glb"), quadGlb()));
+  for (bool raw : {false, true}) {
+    SCOPED_TRACE(raw ? "raw texels" : "embedded PNG");
+    Assimp::Importer importer;
+    ASSERT_NE(importer.ReadFile(dir.file("quad.glb"), 0), nullptr) << importer.GetErrorString();
+    std::unique_ptr<aiScene> scene(importer.GetOrphanedScene());
+    ASSERT_EQ(scene->mNumTextures, 1u);
+    if (raw) {
+      aiTexture& texture = *scene->mTextures[0];
+      delete[] texture.pcData;
+      texture.mWidth = texture.mHeight = 2;
+      texture.pcData = new aiTexel[4]{{0, 0, 255, 255}, {0, 255, 0, 255}, {255, 0, 0, 255}, {255, 255, 255, 255}};
+    }
+    Assimp::Exporter exporter;
+    ASSERT_EQ(exporter.Export(scene.get(), "assbin", dir.file("quad.assbin")), AI_SUCCESS);
+    auto model = loadModel(dir.file("quad.assbin"));
+    ASSERT_TRUE(model.ok()) << model.error().message;
+    expectQuad(*model, {10, 0, 0}, true, true);
+    const Material& m = model->materials.at(model->ranges.at(0).material);
+    EXPECT_EQ(m.base_color, (std::array<float, 4>{0.5f, 0.25f, 1, 1}));
+    ASSERT_EQ(m.texture, 0);
+    expectTestTexture(model->textures[0]);
+  }
 }
 
 TEST(ModelIo, LoadsDrc) {
@@ -592,29 +630,33 @@ TEST(ModelIo, RejectsBadIndicesAndNonFiniteVertices) {
 
   obj = replaceOnce(quadObj("none.mtl"), "v 0 0 0", "v nan 0 1");
   ASSERT_TRUE(writeFile(obj_path, obj));
-  expectError(loadModel(obj_path), ErrorCode::kMalformedInput, obj_path, "vertex 1 (line 3) has non-finite position (nan, 0, 1)");
+  expectError(loadModel(obj_path), ErrorCode::kMalformedInput, obj_path,
+              "vertex 1 (line 3) has non-finite position (nan, 0, 1)");
 
   const std::string ply_path = dir.file("bad.ply");
   ASSERT_TRUE(writeFile(ply_path, quadPlyBinary(INFINITY)));
-  expectError(loadModel(ply_path), ErrorCode::kMalformedInput, ply_path, "vertex 0 has non-finite position (inf, 0, 0)");
+  expectError(loadModel(ply_path), ErrorCode::kMalformedInput, ply_path,
+              "vertex 0 has non-finite position (inf, 0, 0)");
   ASSERT_TRUE(writeFile(ply_path, quadPlyBinary(0.0f, 12)));
-  expectError(loadModel(ply_path), ErrorCode::kMalformedInput, ply_path, "face 1 references vertex 12 but there are 4 vertices");
+  expectError(loadModel(ply_path), ErrorCode::kMalformedInput, ply_path,
+              "face 1 references vertex 12 but there are 4 vertices");
 
   // glTF: an index past the vertices, and a NaN position.
   Bytes buffer = quadBuffer();
   buffer[96 + 10] = 7;
-  std::string json = quadGltfJson(
-      fmt::format(R"({{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}})", buffer.size(), base64(buffer)),
-      R"({"uri":"tex.png"})");
+  std::string json = quadGltfJson(fmt::format(R"({{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}})",
+                                              buffer.size(), base64(buffer)),
+                                  R"({"uri":"tex.png"})");
   const std::string gltf_path = dir.file("bad.gltf");
   ASSERT_TRUE(writeFile(gltf_path, json));
-  expectError(loadModel(gltf_path), ErrorCode::kMalformedInput, gltf_path, "references vertex 7 but there are 4 vertices");
+  expectError(loadModel(gltf_path), ErrorCode::kMalformedInput, gltf_path,
+              "references vertex 7 but there are 4 vertices");
   buffer = quadBuffer();
   const float nan = NAN;
   std::memcpy(&buffer[4], &nan, 4);
-  json = quadGltfJson(
-      fmt::format(R"({{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}})", buffer.size(), base64(buffer)),
-      R"({"uri":"tex.png"})");
+  json = quadGltfJson(fmt::format(R"({{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}})",
+                                  buffer.size(), base64(buffer)),
+                      R"({"uri":"tex.png"})");
   ASSERT_TRUE(writeFile(gltf_path, json));
   expectError(loadModel(gltf_path), ErrorCode::kMalformedInput, gltf_path, "non-finite position");
 }
@@ -629,8 +671,9 @@ TEST(ModelIo, RejectsMeshesWithoutTriangles) {
   ASSERT_TRUE(writeFile(obj_path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\n"));
   expectError(loadModel(obj_path), ErrorCode::kMalformedInput, obj_path, "no triangles");
   const std::string ply_path = dir.file("points.ply");
-  ASSERT_TRUE(writeFile(ply_path, "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
-                                  "property float y\nproperty float z\nend_header\n0 0 0\n1 1 1\n"));
+  ASSERT_TRUE(writeFile(ply_path,
+                        "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float "
+                        "z\nend_header\n0 0 0\n1 1 1\n"));
   expectError(loadModel(ply_path), ErrorCode::kMalformedInput, ply_path, "no triangles");
   const std::string gltf_path = dir.file("empty.gltf");
   ASSERT_TRUE(writeFile(gltf_path, R"({"asset":{"version":"2.0"}})"));
@@ -657,8 +700,9 @@ TEST(ModelIo, RejectsHeadersClaimingHugeSizes) {
   Bytes png = pngBytes();
   png[18] = png[22] = 0xc3;
   png[19] = png[23] = 0x50;
-  std::string lying_png = quadGltfJson(fmt::format(R"({{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}})", 108, base64(quadBuffer())),
-                                       fmt::format(R"({{"uri":"data:image/png;base64,{}"}})", base64(png)));
+  std::string lying_png = quadGltfJson(
+      fmt::format(R"({{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}})", 108, base64(quadBuffer())),
+      fmt::format(R"({{"uri":"data:image/png;base64,{}"}})", base64(png)));
   ASSERT_TRUE(writeFile(dir.file("png.gltf"), lying_png));
   std::vector<std::string> warnings;
   auto model = loadModel(dir.file("png.gltf"), {}, &warnings);
@@ -679,12 +723,25 @@ TEST(ModelIo, RejectsHeadersClaimingHugeSizes) {
     SCOPED_TRACE(method);
     Bytes drc = encodeDracoQuad(0.0f, method, true).bytes;
     ASSERT_EQ(drc[8], method);
-    const size_t at = 12;  // sequential: after the face count; edgebreaker: after the traversal type
+    const size_t at = 12;      // sequential: after the face count; edgebreaker: after the traversal type
     ASSERT_LT(drc[at], 0x80);  // a one-byte varint
     drc.erase(drc.begin() + at);
     drc.insert(drc.begin() + at, {0xff, 0xff, 0xff, 0xff, 0x0f});
     ASSERT_TRUE(writeFile(drc_path, drc));
     expectError(loadModel(drc_path), ErrorCode::kMalformedInput, drc_path, "claims 4294967295 elements");
+  }
+}
+
+TEST(ModelIo, AssimpAssertionsThrowInsteadOfAborting) {
+  // Debian's assimp is built with its internal assertions on; one that fails must throw (so
+  // loadModel can return an Error), not abort. With assertions compiled out this call simply
+  // fails: the material has no properties.
+  aiMaterial material;
+  const aiMaterialProperty* property = nullptr;
+  try {
+    EXPECT_NE(aiGetMaterialProperty(&material, nullptr, 0, 0, &property), AI_SUCCESS);
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("assimp internal check"), std::string::npos) << e.what();
   }
 }
 
@@ -694,8 +751,7 @@ TEST(ModelIo, RejectsHeadersClaimingHugeSizes) {
 // to any side files already there). Each must fail with a one-line message naming the file,
 // or load a model that passes validateModel; truncations of binary formats and random bytes
 // must fail.
-void fuzzFormat(const TempDir& dir, const std::string& name, const Bytes& valid, bool text,
-                size_t header_size) {
+void fuzzFormat(const TempDir& dir, const std::string& name, const Bytes& valid, bool text, size_t header_size) {
   const std::string path = dir.file(name);
   ASSERT_TRUE(writeFile(path, valid));
   auto model = loadModel(path);
@@ -761,8 +817,8 @@ TEST(ModelIoFuzz, Gltf) {
   TempDir dir("modelio");
   ASSERT_TRUE(writeFile(dir.file("quad.bin"), quadBuffer()));
   ASSERT_TRUE(writeFile(dir.file("tex.png"), pngBytes()));
-  const std::string json = quadGltfJson(fmt::format(R"({{"byteLength":{},"uri":"quad.bin"}})", quadBuffer().size()),
-                                        R"({"uri":"tex.png"})");
+  const std::string json =
+      quadGltfJson(fmt::format(R"({{"byteLength":{},"uri":"quad.bin"}})", quadBuffer().size()), R"({"uri":"tex.png"})");
   fuzzFormat(dir, "fuzz.gltf", toBytes(json), true, 1);
 }
 

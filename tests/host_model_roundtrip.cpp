@@ -202,29 +202,29 @@ TEST(ModelRoundTripFiles, GltfFollowsTheSpecLayout) {
     o.draco = draco;
     const std::string path = dir.file(draco ? "room_draco.glb" : "room.glb");
     ASSERT_TRUE(saveModel(room, path, o).ok());
-    const json j = glbJson(test::readFile(path));
+    json j = glbJson(test::readFile(path));  // Not const: a missing key reads as null and fails.
     ASSERT_TRUE(j.is_object());
     EXPECT_EQ(j["asset"]["version"], "2.0");
     ASSERT_EQ(j["meshes"].size(), 1u);
     EXPECT_EQ(j["meshes"][0]["primitives"].size(), room.materials.size());  // All used.
     EXPECT_EQ(j["materials"].size(), room.materials.size());
     EXPECT_EQ(j["images"].size(), room.textures.size());
-    for (const json& s : j["samplers"]) {
-      EXPECT_EQ(s["wrapS"], 10497);
-      EXPECT_EQ(s["wrapT"], 10497);
+    for (json& sampler : j["samplers"]) {
+      EXPECT_EQ(sampler["wrapS"], 10497);
+      EXPECT_EQ(sampler["wrapT"], 10497);
     }
-    for (const json& image : j["images"]) EXPECT_EQ(image["mimeType"], "image/png");
-    for (const json& p : j["meshes"][0]["primitives"]) {
-      const json& pos = j["accessors"][p["attributes"]["POSITION"].get<size_t>()];
+    for (json& image : j["images"]) EXPECT_EQ(image["mimeType"], "image/png");
+    for (json& p : j["meshes"][0]["primitives"]) {
+      json& pos = j["accessors"][p["attributes"]["POSITION"].get<size_t>()];
       EXPECT_EQ(pos["min"].size(), 3u);
       EXPECT_EQ(pos["max"].size(), 3u);
       EXPECT_EQ(j["accessors"][p["indices"].get<size_t>()]["componentType"], 5125);
-      const json& col = j["accessors"][p["attributes"]["COLOR_0"].get<size_t>()];
+      json& col = j["accessors"][p["attributes"]["COLOR_0"].get<size_t>()];
       EXPECT_EQ(col["componentType"], 5121);
       EXPECT_EQ(col["normalized"], true);
       EXPECT_TRUE(p["attributes"].contains("TEXCOORD_0"));
       EXPECT_EQ(p["extensions"].contains("KHR_draco_mesh_compression"), draco);
-      const json& mat = j["materials"][p["material"].get<size_t>()]["pbrMetallicRoughness"];
+      json& mat = j["materials"][p["material"].get<size_t>()]["pbrMetallicRoughness"];
       EXPECT_EQ(mat["baseColorFactor"].size(), 4u);
       EXPECT_TRUE(mat.contains("baseColorTexture"));
     }

@@ -24,6 +24,8 @@
 namespace vkloc {
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+
 // ================================================================================================
 // Deterministic random numbers
 // ================================================================================================
@@ -77,8 +79,9 @@ struct Rgb {
   }
 };
 
-/// A square RGB canvas; coordinates are fractions of the side (0..1, y down). Filled shapes
-/// wrap around the edges so that textures tile seamlessly with repeat sampling.
+/// A square RGBA canvas; coordinates are fractions of the side (0..1, y down). Rectangles,
+/// lines and circles wrap around the edges so that textures tile seamlessly with repeat
+/// sampling; the other shapes are meant to stay inside.
 class Canvas {
  public:
   /// Draws straight into the RGBA storage of the texture that finish() returns.
@@ -929,6 +932,12 @@ struct Rect {
   double h() const { return y1 - y0; }
 };
 
+/// Sorts coordinates and drops duplicates (closer than 1 nm).
+void sortUnique(std::vector<double>& v) {
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end(), [](double a, double c) { return std::abs(a - c) < 1e-9; }), v.end());
+}
+
 /// A region of the plane: union of `include` rectangles minus the union of `exclude` ones.
 struct Region {
   std::vector<Rect> include, exclude;
@@ -995,12 +1004,8 @@ class MeshBuilder {
     };
     for (const auto& r : reg.include) addCoords(r);
     for (const auto& r : reg.exclude) addCoords(r);
-    auto uniq = [](std::vector<double>& v) {
-      std::sort(v.begin(), v.end());
-      v.erase(std::unique(v.begin(), v.end(), [](double a, double c) { return std::abs(a - c) < 1e-9; }), v.end());
-    };
-    uniq(xs);
-    uniq(ys);
+    sortUnique(xs);
+    sortUnique(ys);
     for (size_t j = 0; j + 1 < ys.size(); ++j) {
       const double yc = 0.5 * (ys[j] + ys[j + 1]);
       size_t i = 0;
@@ -1246,12 +1251,8 @@ std::vector<WallSeg> regionOutline(const Region& reg) {
   std::vector<double> xs, ys;
   for (const auto* list : {&reg.include, &reg.exclude})
     for (const auto& r : *list) xs.insert(xs.end(), {r.x0, r.x1}), ys.insert(ys.end(), {r.y0, r.y1});
-  auto uniq = [](std::vector<double>& v) {
-    std::sort(v.begin(), v.end());
-    v.erase(std::unique(v.begin(), v.end(), [](double a, double c) { return std::abs(a - c) < 1e-9; }), v.end());
-  };
-  uniq(xs);
-  uniq(ys);
+  sortUnique(xs);
+  sortUnique(ys);
   const int nx = static_cast<int>(xs.size()) - 1, ny = static_cast<int>(ys.size()) - 1;
   auto inside = [&](int i, int j) {
     if (i < 0 || j < 0 || i >= nx || j >= ny) return false;
@@ -1334,7 +1335,7 @@ constexpr double kGap = 0.002;       ///< Loose objects float this far above wha
 constexpr double kSkirt = 0.05;      ///< Walls and kerbs reach this far below the surface around them.
 constexpr int kMaxBuildings = 30;
 
-const V3 kX{1, 0, 0}, kY{0, 1, 0}, kZ{0, 0, 1}, kNegX{-1, 0, 0}, kNegY{0, -1, 0}, kNegZ{0, 0, -1};
+const V3 kX{1, 0, 0}, kY{0, 1, 0}, kZ{0, 0, 1}, kNegX{-1, 0, 0}, kNegY{0, -1, 0};
 
 struct CityMaterials {
   int road, crossing, junction, sidewalk, plaza, grass, parking;
@@ -1412,7 +1413,7 @@ void addBlockGround(MeshBuilder& mb, const CityMaterials& cm, const Rect& blk, i
   mb.rect(Frame{{blk.x0 + kWalk, blk.y0 + kWalk, z}, kY, kNegX}, 0, 0, h - 2 * kWalk, kWalk,
           UvMap{0.25, (blk.y0 + kWalk) / 4, 1 / kWalk, 0}, cm.sidewalk);
   mb.rect(Frame{{blk.x1 - kWalk, blk.y1 - kWalk, z}, kNegY, kX}, 0, 0, h - 2 * kWalk, kWalk,
-          UvMap{0.25, (kHalfMap - blk.y1 + kWalk) / 4, 1 / kWalk, 0}, cm.sidewalk);
+          UvMap{0.25, -(blk.y1 - kWalk) / 4, 1 / kWalk, 0}, cm.sidewalk);
   for (const WallSeg& wall : regionOutline(Region{{blk}, {}})) {
     const double len = wall.length();
     mb.rect(wallFrame(wall, -kSkirt), 0, 0, len, kKerbH + kSkirt,
@@ -1651,7 +1652,7 @@ void addTree(MeshBuilder& mb, int bark, int leaves, double x, double y, double z
   constexpr int n = 8;
   V3 lower[n], upper[n];
   for (int i = 0; i < n; ++i) {
-    const double a = phase + 2 * M_PI * i / n;
+    const double a = phase + 2 * kPi * i / n;
     lower[i] = {x + r * std::cos(a), y + r * std::sin(a), zb};
     upper[i] = {x + 0.85 * r * std::cos(a), y + 0.85 * r * std::sin(a), zc};
   }
@@ -1998,7 +1999,7 @@ std::vector<Pose> demoViewpoints(const std::string& name) {
   if (name == "city") {
     // Drone views tilted 45 degrees down; eyes below the roof-tops stay over the streets.
     auto drone = [&](double x, double y, double altitude, double yaw_deg) {
-      const double yaw = yaw_deg * M_PI / 180;
+      const double yaw = yaw_deg * kPi / 180;
       views.push_back({x, y, altitude, x + altitude * std::cos(yaw), y + altitude * std::sin(yaw), 0});
     };
     drone(1.0, -45.0, 10, 90);

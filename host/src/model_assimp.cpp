@@ -2,7 +2,13 @@
 // import, because assimp's parsers accept garbage (binary bytes as OBJ, truncated PLY bodies),
 // size arrays from unchecked header counts, and can trip its internal assertions on the
 // result: the checks walk the file and report what is wrong with line or element numbers.
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <assimp/Importer.hpp>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -10,12 +16,6 @@
 #include <map>
 #include <stdexcept>
 #include <string_view>
-
-#include <assimp/Importer.hpp>
-#include <assimp/material.h>
-#include <assimp/postprocess.h>
-#include <assimp/scene.h>
-#include <fmt/format.h>
 
 #include "model_internal.hpp"
 
@@ -25,8 +25,7 @@
 // assertion during an import throws, and loadWithAssimp reports the file as malformed.
 namespace Assimp {
 void aiAssertViolation(const char* expression, const char* file, int line) {
-  throw std::runtime_error(fmt::format("assimp internal check '{}' failed ({}:{})", expression,
-                                       file, line));
+  throw std::runtime_error(fmt::format("assimp internal check '{}' failed ({}:{})", expression, file, line));
 }
 }  // namespace Assimp
 
@@ -50,13 +49,14 @@ std::vector<std::string_view> tokens(std::string_view line) {
   return out;
 }
 
-// `text` for quoting in a message: bytes outside printable ASCII become '?', at most 60 kept.
-std::string quote(std::string_view text) {
-  std::string out(text.substr(0, 60));
+// `text` for quoting in a message: bytes outside printable ASCII become '?', at most
+// `max_size` kept.
+std::string quote(std::string_view text, size_t max_size = 60) {
+  std::string out(text.substr(0, max_size));
   for (char& c : out) {
     if (c < 0x20 || c > 0x7e) c = '?';
   }
-  return text.size() > 60 ? out + "..." : out;
+  return text.size() > max_size ? out + "..." : out;
 }
 
 // Calls fn(line_number, line) for every line of `text` (1-based numbers, no line break).
@@ -75,14 +75,19 @@ bool forEachLine(std::string_view text, Fn&& fn) {
 // ---- OBJ ------------------------------------------------------------------------------------
 
 // forEachLine for OBJ: like assimp's OBJ parser, a carriage return or form feed also ends a
-// line (the pieces keep the line number of the '\n'-terminated line they are in).
+// line (the pieces keep the line number of the '\n'-terminated line they are in), and a
+// comment runs from a '#' that starts a token to the end of the line.
 template <typename Fn>
 void forEachObjLine(std::string_view text, Fn&& fn) {
   forEachLine(text, [&](size_t line_number, std::string_view line) {
     size_t start = 0;
     for (size_t i = 0; i <= line.size(); ++i) {
       if (i == line.size() || line[i] == '\r' || line[i] == '\f') {
-        if (!fn(line_number, line.substr(start, i - start))) return false;
+        std::string_view piece = line.substr(start, i - start);
+        for (size_t k = 0; k < piece.size(); ++k) {
+          if (piece[k] == '#' && (k == 0 || isSpace(piece[k - 1]))) piece = piece.substr(0, k);
+        }
+        if (!fn(line_number, piece)) return false;
         start = i + 1;
       }
     }
@@ -105,8 +110,8 @@ int objStatement(std::string_view keyword) {
   if (keyword == "vt") return 1;
   if (keyword == "vn") return 2;
   if (keyword == "f" || keyword == "fo" || keyword == "l" || keyword == "p") return 3;
-  const bool lookalike = keyword.substr(0, 2) == "vt" || keyword.substr(0, 2) == "vn" ||
-                         keyword[0] == 'f' || keyword[0] == 'l' || keyword[0] == 'p';
+  const bool lookalike = keyword.substr(0, 2) == "vt" || keyword.substr(0, 2) == "vn" || keyword[0] == 'f' ||
+                         keyword[0] == 'l' || keyword[0] == 'p';
   return lookalike ? -2 : -1;
 }
 
@@ -114,12 +119,10 @@ int objStatement(std::string_view keyword) {
 // and that every face, line and point references existing vertices, texture coordinates and
 // normals (1-based, or negative = relative to the last one defined). Warns about missing
 // material libraries.
-Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
-                std::vector<std::string>& warnings) {
+Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes, std::vector<std::string>& warnings) {
   for (size_t i = 0; i < bytes.size(); ++i) {
     const uint8_t b = bytes[i];
-    if ((b < 0x20 && b != '\t' && b != '\n' && b != '\r' && b != '\v' && b != '\f' && b != 0x1a) ||
-        b == 0x7f) {
+    if ((b < 0x20 && b != '\t' && b != '\n' && b != '\r' && b != '\v' && b != '\f' && b != 0x1a) || b == 0x7f) {
       return fileError(ErrorCode::kMalformedInput, path,
                        fmt::format("not a text OBJ file (byte 0x{:02x} at offset {})", b, i));
     }
@@ -163,16 +166,16 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
       float p[3];
       for (int k = 0; k < 3; ++k) {
         if (t.size() < 4 || !parseFloat(t[1 + k], p[k])) {
-          status = fileError(ErrorCode::kMalformedInput, path,
-                             fmt::format("vertex {} (line {}) is not 'v x y z': '{}'", seen[0] + 1,
-                                         line_number, quote(line)));
+          status = fileError(
+              ErrorCode::kMalformedInput, path,
+              fmt::format("vertex {} (line {}) is not 'v x y z': '{}'", seen[0] + 1, line_number, quote(line)));
           return false;
         }
       }
       if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
         status = fileError(ErrorCode::kMalformedInput, path,
-                           fmt::format("vertex {} (line {}) has non-finite position ({}, {}, {})",
-                                       seen[0] + 1, line_number, p[0], p[1], p[2]));
+                           fmt::format("vertex {} (line {}) has non-finite position ({}, {}, {})", seen[0] + 1,
+                                       line_number, p[0], p[1], p[2]));
         return false;
       }
       ++seen[0];
@@ -184,9 +187,8 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
       bool found = fs::exists(dir / std::string(oneLine(rest)), ec);
       for (size_t i = 1; i < t.size() && !found; ++i) found = fs::exists(dir / std::string(t[i]), ec);
       if (!found) {
-        warnings.push_back(oneLine(fmt::format("{}: material library '{}' not found; its "
-                                               "materials use the default colour", path,
-                                               oneLine(rest))));
+        warnings.push_back(oneLine(fmt::format(
+            "{}: material library '{}' not found; its materials use the default colour", path, oneLine(rest))));
       }
     }
     if (statement != 3) return true;
@@ -197,8 +199,8 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
     const size_t needed = type == 'f' ? 3 : type == 'l' ? 2 : 1;
     if (t.size() - 1 < needed) {
       status = fileError(ErrorCode::kMalformedInput, path,
-                         fmt::format("{} {} (line {}) has {} vertices, fewer than {}", what,
-                                     element, line_number, t.size() - 1, needed));
+                         fmt::format("{} {} (line {}) has {} vertices, fewer than {}", what, element, line_number,
+                                     t.size() - 1, needed));
       return false;
     }
     for (size_t i = 1; i < t.size(); ++i) {
@@ -212,17 +214,16 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes,
         const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), index);
         if (ec != std::errc() || end != field.data() + field.size() || index == 0) {
           status = fileError(ErrorCode::kMalformedInput, path,
-                             fmt::format("{} {} (line {}) has a malformed vertex reference '{}'",
-                                         what, element, line_number, quote(t[i])));
+                             fmt::format("{} {} (line {}) has a malformed vertex reference '{}'", what, element,
+                                         line_number, quote(t[i])));
           return false;
         }
         const int64_t resolved = index > 0 ? index : static_cast<int64_t>(seen[kind]) + index + 1;
         const uint64_t available = index > 0 ? total[kind] : seen[kind];
         if (resolved < 1 || static_cast<uint64_t>(resolved) > available) {
           status = fileError(ErrorCode::kMalformedInput, path,
-                             fmt::format("{} {} (line {}) references {} {} but there are {} {}",
-                                         what, element, line_number, kKinds[kind], index,
-                                         available, kPlurals[kind]));
+                             fmt::format("{} {} (line {}) references {} {} but there are {} {}", what, element,
+                                         line_number, kKinds[kind], index, available, kPlurals[kind]));
           return false;
         }
       }
@@ -304,14 +305,30 @@ class PlyReader {
       return static_cast<double>(v);
     };
     switch (type) {
-      case PlyType::kInt8: value = as(int8_t{}); break;
-      case PlyType::kUint8: value = as(uint8_t{}); break;
-      case PlyType::kInt16: value = as(int16_t{}); break;
-      case PlyType::kUint16: value = as(uint16_t{}); break;
-      case PlyType::kInt32: value = as(int32_t{}); break;
-      case PlyType::kUint32: value = as(uint32_t{}); break;
-      case PlyType::kFloat32: value = as(float{}); break;
-      default: value = as(double{}); break;
+      case PlyType::kInt8:
+        value = as(int8_t{});
+        break;
+      case PlyType::kUint8:
+        value = as(uint8_t{});
+        break;
+      case PlyType::kInt16:
+        value = as(int16_t{});
+        break;
+      case PlyType::kUint16:
+        value = as(uint16_t{});
+        break;
+      case PlyType::kInt32:
+        value = as(int32_t{});
+        break;
+      case PlyType::kUint32:
+        value = as(uint32_t{});
+        break;
+      case PlyType::kFloat32:
+        value = as(float{});
+        break;
+      default:
+        value = as(double{});
+        break;
     }
     return true;
   }
@@ -355,8 +372,7 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
   forEachLine(text, [&](size_t line_number, std::string_view line) {
     const auto t = tokens(line);
     const auto bad = [&](const std::string& what) {
-      status = fileError(ErrorCode::kMalformedInput, path,
-                         fmt::format("PLY header line {}: {}", line_number, what));
+      status = fileError(ErrorCode::kMalformedInput, path, fmt::format("PLY header line {}: {}", line_number, what));
       return false;
     };
     if (line_number == 1 || t.empty() || t[0] == "comment" || t[0] == "obj_info") return true;
@@ -365,8 +381,7 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
       return false;
     }
     if (t[0] == "format") {
-      if (t.size() < 2 || (t[1] != "ascii" && t[1] != "binary_little_endian" &&
-                           t[1] != "binary_big_endian")) {
+      if (t.size() < 2 || (t[1] != "ascii" && t[1] != "binary_little_endian" && t[1] != "binary_big_endian")) {
         return bad("unknown format '" + quote(line) + "'");
       }
       format = std::string(t[1]);
@@ -409,8 +424,8 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
     return fileError(ErrorCode::kMalformedInput, path, "truncated PLY header (no end_header)");
   }
   if (format.empty()) return fileError(ErrorCode::kMalformedInput, path, "PLY header has no format");
-  const auto vertex = std::find_if(elements.begin(), elements.end(),
-                                   [](const PlyElement& e) { return e.name == "vertex"; });
+  const auto vertex =
+      std::find_if(elements.begin(), elements.end(), [](const PlyElement& e) { return e.name == "vertex"; });
   int position[3] = {-1, -1, -1};
   for (size_t i = 0; vertex != elements.end() && i < vertex->properties.size(); ++i) {
     const PlyProperty& p = vertex->properties[i];
@@ -421,8 +436,7 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
     }
   }
   if (position[0] < 0 || position[1] < 0 || position[2] < 0) {
-    return fileError(ErrorCode::kMalformedInput, path,
-                     "PLY has no 'vertex' element with x, y and z properties");
+    return fileError(ErrorCode::kMalformedInput, path, "PLY has no 'vertex' element with x, y and z properties");
   }
   std::string counts;
   for (const PlyElement& e : elements) {
@@ -431,25 +445,29 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
   const std::string_view body = text.substr(std::min(data_offset, text.size()));
   if (format == "ascii" && !plainText(body, bad_byte)) {
     return fileError(ErrorCode::kMalformedInput, path,
-                     fmt::format("ASCII PLY has a non-text byte at offset {}",
-                                 data_offset + bad_byte));
+                     fmt::format("ASCII PLY has a non-text byte at offset {}", data_offset + bad_byte));
   }
   PlyReader reader(body, format);
   for (const PlyElement& e : elements) {
     const bool is_vertex = &e == &*vertex;
     const bool is_face = e.name == "face";
     for (uint64_t i = 0; i < e.count; ++i) {
-      const auto truncated = [&](const std::string& property) {
-        return fileError(ErrorCode::kMalformedInput, path,
-                         fmt::format("truncated or non-numeric {} PLY: header declares {} but "
-                                     "{} {} {} cannot be read", format, counts, e.name, i,
-                                     property));
-      };
-      if (!reader.beginInstance()) return truncated("(a line of its own)");
+      if (!reader.beginInstance()) {
+        return fileError(
+            ErrorCode::kMalformedInput, path,
+            fmt::format("truncated {} PLY: header declares {} but {} {} is missing (end of data or blank line)", format,
+                        counts, e.name, i));
+      }
       double xyz[3] = {0, 0, 0};
       for (size_t j = 0; j < e.properties.size(); ++j) {
         const PlyProperty& p = e.properties[j];
-        const auto truncated_property = [&]() { return truncated("property '" + p.name + "'"); };
+        const auto truncated_property = [&]() {
+          return fileError(
+              ErrorCode::kMalformedInput, path,
+              fmt::format(
+                  "truncated or malformed {} PLY: {} {} property '{}' is missing or not a number (header declares {})",
+                  format, e.name, i, p.name, counts));
+        };
         double value = 0;
         if (p.count_type == PlyType::kInvalid) {
           if (!reader.next(p.type, value)) return truncated_property();
@@ -468,17 +486,16 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
         for (double k = 0; k < length; ++k) {
           if (!reader.next(p.type, value)) return truncated_property();
           if (indices && !(value >= 0 && value < static_cast<double>(vertex->count))) {
-            return fileError(ErrorCode::kMalformedInput, path,
-                             fmt::format("face {} references vertex {} but there are {} vertices",
-                                         i, value, vertex->count));
+            return fileError(
+                ErrorCode::kMalformedInput, path,
+                fmt::format("face {} references vertex {} but there are {} vertices", i, value, vertex->count));
           }
         }
       }
       if (is_vertex && !(std::isfinite(xyz[0]) && std::isfinite(xyz[1]) && std::isfinite(xyz[2]))) {
         return fileError(ErrorCode::kMalformedInput, path,
-                         fmt::format("vertex {} has non-finite position ({}, {}, {})", i,
-                                     static_cast<float>(xyz[0]), static_cast<float>(xyz[1]),
-                                     static_cast<float>(xyz[2])));
+                         fmt::format("vertex {} has non-finite position ({}, {}, {})", i, static_cast<float>(xyz[0]),
+                                     static_cast<float>(xyz[1]), static_cast<float>(xyz[2])));
       }
     }
   }
@@ -508,8 +525,7 @@ class SceneConverter {
     if (white_when_coloured) {
       if (model_.materials.empty()) model_.materials.push_back(Material{"default"});
       for (Material& m : model_.materials) {
-        m.base_color = model_.colors.empty() ? Material{}.base_color
-                                             : std::array<float, 4>{1.0f, 1.0f, 1.0f, 1.0f};
+        m.base_color = model_.colors.empty() ? Material{}.base_color : std::array<float, 4>{1.0f, 1.0f, 1.0f, 1.0f};
       }
     }
     return std::move(model_);
@@ -544,8 +560,8 @@ class SceneConverter {
       const aiVector3D& source = mesh.mVertices[v];
       if (!std::isfinite(source.x) || !std::isfinite(source.y) || !std::isfinite(source.z)) {
         return fileError(ErrorCode::kMalformedInput, path_,
-                         fmt::format("vertex {} has non-finite position ({}, {}, {})",
-                                     vertex_count_ + v, source.x, source.y, source.z));
+                         fmt::format("vertex {} has non-finite position ({}, {}, {})", vertex_count_ + v, source.x,
+                                     source.y, source.z));
       }
       const aiVector3D p = T * source;
       prim.positions[3 * v] = p.x;
@@ -588,8 +604,7 @@ class SceneConverter {
   Material convertMaterial(const aiMaterial& source, unsigned index) {
     Material m;
     aiString name;
-    m.name = source.Get(AI_MATKEY_NAME, name) == AI_SUCCESS ? name.C_Str()
-                                                           : fmt::format("material{}", index);
+    m.name = source.Get(AI_MATKEY_NAME, name) == AI_SUCCESS ? name.C_Str() : fmt::format("material{}", index);
     aiColor4D color;
     float opacity = 1.0f;
     if (source.Get(AI_MATKEY_BASE_COLOR, color) == AI_SUCCESS) {
@@ -622,8 +637,7 @@ class SceneConverter {
     if (const aiTexture* embedded = scene_.GetEmbeddedTexture(reference.c_str())) {
       tex.name = "embedded " + reference;
       if (!decodeEmbedded(*embedded, tex, error)) {
-        warnings_.push_back(oneLine(context + " cannot be decoded (" + error +
-                                    "); using the base colour"));
+        warnings_.push_back(oneLine(context + " cannot be decoded (" + error + "); using the base colour"));
         return -1;
       }
     } else if (!reference.empty() && reference[0] == '*') {
@@ -636,15 +650,14 @@ class SceneConverter {
       fs::path file = dir_ / relative;
       if (!fs::is_regular_file(file, ec)) file = dir_ / fs::path(relative).filename();
       if (!fs::is_regular_file(file, ec)) {
-        warnings_.push_back(oneLine(fmt::format("{} not found (looked for {}); using the base "
-                                                "colour", context, (dir_ / relative).string())));
+        warnings_.push_back(oneLine(
+            fmt::format("{} not found (looked for {}); using the base colour", context, (dir_ / relative).string())));
         return -1;
       }
       tex.name = file.string();
       auto bytes = readFileBytes(file.string());
       if (!bytes.ok() || !decodeTexture(bytes->data(), bytes->size(), tex, error)) {
-        warnings_.push_back(oneLine(context + " cannot be read (" +
-                                    (bytes.ok() ? error : bytes.error().message) +
+        warnings_.push_back(oneLine(context + " cannot be read (" + (bytes.ok() ? error : bytes.error().message) +
                                     "); using the base colour"));
         return -1;
       }
@@ -660,8 +673,7 @@ class SceneConverter {
       return false;
     }
     if (source.mHeight == 0) {  // compressed file bytes (PNG, JPEG, ...)
-      return decodeTexture(reinterpret_cast<const uint8_t*>(source.pcData), source.mWidth, tex,
-                           error);
+      return decodeTexture(reinterpret_cast<const uint8_t*>(source.pcData), source.mWidth, tex, error);
     }
     if (source.mWidth > 32768 || source.mHeight > 32768) {
       error = fmt::format("{}x{} texels", source.mWidth, source.mHeight);
@@ -697,8 +709,7 @@ bool assimpReadsExtension(const std::string& ext) {
   return importer.IsExtensionSupported(ext);
 }
 
-Result<Model> loadWithAssimp(const std::string& path, const std::string& ext,
-                             std::vector<std::string>& warnings) {
+Result<Model> loadWithAssimp(const std::string& path, const std::string& ext, std::vector<std::string>& warnings) {
   if (ext == ".obj") {
     auto bytes = readFileBytes(path);
     if (!bytes.ok()) return bytes.error();
@@ -714,9 +725,8 @@ Result<Model> loadWithAssimp(const std::string& path, const std::string& ext,
   // ValidateDataStructure runs first and rejects out-of-range indices before the other steps.
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const unsigned flags = aiProcess_ValidateDataStructure | aiProcess_Triangulate |
-                         aiProcess_SortByPType | aiProcess_JoinIdenticalVertices |
-                         aiProcess_FlipUVs;
+  const unsigned flags = aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_SortByPType |
+                         aiProcess_JoinIdenticalVertices | aiProcess_FlipUVs;
   const aiScene* scene = nullptr;
   std::string error;
   try {
@@ -732,7 +742,7 @@ Result<Model> loadWithAssimp(const std::string& path, const std::string& ext,
       return fileError(ErrorCode::kMalformedInput, path, "mesh has no triangles");
     }
     return fileError(ErrorCode::kMalformedInput, path,
-                     "cannot import: " + (error.empty() ? std::string("unknown error") : error));
+                     "cannot import: " + (error.empty() ? std::string("unknown error") : quote(error, 300)));
   }
   return SceneConverter(path, *scene, warnings).convert(ext == ".ply");
 }

@@ -17,8 +17,7 @@ struct Centroid {
 
 class BlockSplitter {
  public:
-  BlockSplitter(std::vector<Centroid>& items, uint32_t max_triangles)
-      : items_(items), max_(max_triangles) {}
+  BlockSplitter(std::vector<Centroid>& items, uint32_t max_triangles) : items_(items), max_(max_triangles) {}
 
   // Splits items_[begin, end) at the median centroid along the longest axis of the centroids'
   // bounds until each part holds at most max_ triangles; appends the parts in tree order.
@@ -43,8 +42,7 @@ class BlockSplitter {
     const size_t mid = begin + (end - begin) / 2;
     std::nth_element(items_.begin() + begin, items_.begin() + mid, items_.begin() + end,
                      [axis](const Centroid& a, const Centroid& b) {
-                       return a.c[axis] < b.c[axis] ||
-                              (a.c[axis] == b.c[axis] && a.triangle < b.triangle);
+                       return a.c[axis] < b.c[axis] || (a.c[axis] == b.c[axis] && a.triangle < b.triangle);
                      });
     split(begin, mid);
     split(mid, end);
@@ -85,12 +83,10 @@ void updateBounds(Model& model) {
   }
   for (Block& block : model.blocks) {
     block.bounds = Aabb{};
-    const uint64_t last = std::min<uint64_t>(uint64_t{block.first_range} + block.range_count,
-                                             model.ranges.size());
+    const uint64_t last = std::min<uint64_t>(uint64_t{block.first_range} + block.range_count, model.ranges.size());
     for (uint64_t r = block.first_range; r < last; ++r) {
       const DrawRange& range = model.ranges[r];
-      const uint64_t end = std::min<uint64_t>(uint64_t{range.first_index} + range.index_count,
-                                              model.indices.size());
+      const uint64_t end = std::min<uint64_t>(uint64_t{range.first_index} + range.index_count, model.indices.size());
       for (uint64_t i = range.first_index; i + 2 < end; i += 3) {
         extendByTriangle(block.bounds, model, &model.indices[i]);
       }
@@ -109,8 +105,7 @@ void buildBlocks(Model& model, uint32_t max_block_triangles) {
   std::vector<int> material(triangles, 0);
   for (const DrawRange& r : model.ranges) {
     const uint64_t first = r.first_index / 3;
-    const uint64_t last = std::min<uint64_t>((uint64_t{r.first_index} + r.index_count) / 3,
-                                             triangles);
+    const uint64_t last = std::min<uint64_t>((uint64_t{r.first_index} + r.index_count) / 3, triangles);
     for (uint64_t t = first; t < last; ++t) material[t] = r.material;
   }
 
@@ -132,24 +127,28 @@ void buildBlocks(Model& model, uint32_t max_block_triangles) {
   BlockSplitter splitter(items, max_block_triangles);
   if (triangles > 0) splitter.split(0, triangles);
 
-  // Within a block, order triangles by material (then original order) and emit one range per
-  // run of equal material.
+  // Within a block, order triangles by material, then original order (sorting 64-bit keys
+  // (material with its sign bit flipped, triangle) is much faster than comparing through the
+  // material table), and emit one range per run of equal material.
   std::vector<uint32_t> indices(model.indices.size());
+  std::vector<uint64_t> keys;
   model.ranges.clear();
   model.blocks.clear();
   for (const auto& [begin, end] : splitter.leaves()) {
-    std::sort(items.begin() + begin, items.begin() + end,
-              [&material](const Centroid& a, const Centroid& b) {
-                const int ma = material[a.triangle], mb = material[b.triangle];
-                return ma < mb || (ma == mb && a.triangle < b.triangle);
-              });
+    keys.clear();
+    for (size_t i = begin; i < end; ++i) {
+      const uint32_t t = items[i].triangle;
+      keys.push_back((uint64_t{static_cast<uint32_t>(material[t]) ^ 0x80000000u} << 32) | t);
+    }
+    std::sort(keys.begin(), keys.end());
     Block block;
     block.first_range = static_cast<uint32_t>(model.ranges.size());
     block.triangle_count = static_cast<uint32_t>(end - begin);
-    for (size_t i = begin; i < end; ++i) {
-      const uint32_t t = items[i].triangle;
+    for (size_t k = 0; k < keys.size(); ++k) {
+      const uint32_t t = static_cast<uint32_t>(keys[k]);
+      const size_t i = begin + k;
       std::copy_n(&model.indices[3 * size_t{t}], 3, &indices[3 * i]);
-      if (i == begin || material[t] != material[items[i - 1].triangle]) {
+      if (k == 0 || (keys[k] >> 32) != (keys[k - 1] >> 32)) {
         model.ranges.push_back(DrawRange{static_cast<uint32_t>(3 * i), 0, material[t]});
       }
       model.ranges.back().index_count += 3;

@@ -2,18 +2,18 @@
 // Debian's assimp cannot decode KHR_draco_mesh_compression, one parser keeps Draco and plain
 // primitives consistent in mixed files, and every offset and count read from the file is
 // checked against the bytes that back it before anything is allocated or read.
+#include <draco/compression/decode.h>
+#include <draco/mesh/mesh.h>
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <map>
 #include <memory>
-#include <optional>
-
-#include <draco/compression/decode.h>
-#include <draco/mesh/mesh.h>
-#include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "model_internal.hpp"
 
@@ -30,7 +30,12 @@ class ByteReader {
  public:
   ByteReader(const uint8_t* data, size_t size) : p_(data), left_(size) {}
   bool u8(uint8_t& v) { return read(&v, 1); }
-  bool u16(uint16_t& v) { uint8_t b[2]; if (!read(b, 2)) return false; v = static_cast<uint16_t>(b[0] | (b[1] << 8)); return true; }
+  bool u16(uint16_t& v) {
+    uint8_t b[2];
+    if (!read(b, 2)) return false;
+    v = static_cast<uint16_t>(b[0] | (b[1] << 8));
+    return true;
+  }
   bool u32(uint32_t& v) {
     uint8_t b[4];
     if (!read(b, 4)) return false;
@@ -114,9 +119,8 @@ bool checkDracoCounts(const uint8_t* data, size_t size, std::string& error) {
   } else if (method == 1) {  // edgebreaker: vertices, faces, symbols, split symbols
     uint8_t traversal = 0, attribute_data = 0;
     uint32_t new_vertices = 0;
-    ok = ok && r.u8(traversal) && (version >= 0x0202 || count(fixed, new_vertices)) &&
-         count(fixed, counts[0]) && count(fixed, counts[1]) && r.u8(attribute_data) &&
-         count(fixed, counts[2]) && count(fixed, counts[3]);
+    ok = ok && r.u8(traversal) && (version >= 0x0202 || count(fixed, new_vertices)) && count(fixed, counts[0]) &&
+         count(fixed, counts[1]) && r.u8(attribute_data) && count(fixed, counts[2]) && count(fixed, counts[3]);
   } else {
     error = fmt::format("unknown Draco encoding method {}", method);
     return false;
@@ -137,8 +141,7 @@ bool checkDracoCounts(const uint8_t* data, size_t size, std::string& error) {
 
 // Decodes a Draco triangle mesh. On failure returns null with `error` set; `unsupported` is set
 // when the stream is valid but holds a point cloud.
-std::unique_ptr<draco::Mesh> decodeDracoMesh(const uint8_t* data, size_t size, std::string& error,
-                                             bool& unsupported) {
+std::unique_ptr<draco::Mesh> decodeDracoMesh(const uint8_t* data, size_t size, std::string& error, bool& unsupported) {
   unsupported = false;
   if (size < 5 || std::memcmp(data, "DRACO", 5) != 0) {
     error = "not a Draco stream (no DRACO magic)";
@@ -175,8 +178,7 @@ std::unique_ptr<draco::Mesh> decodeDracoMesh(const uint8_t* data, size_t size, s
 }
 
 // Reads `comps` components per point as floats (normalized integers as 0..1).
-bool readDracoAttribute(const draco::PointAttribute& att, uint32_t points, int comps,
-                        std::vector<float>& out) {
+bool readDracoAttribute(const draco::PointAttribute& att, uint32_t points, int comps, std::vector<float>& out) {
   if (att.num_components() < 1 || (!att.is_mapping_identity() && att.indices_map_size() < points)) {
     return false;
   }
@@ -197,12 +199,10 @@ uint8_t toByte(float v) {
 
 // Converts a decoded Draco mesh to a primitive. `flip_v` turns a bottom-left uv origin into the
 // top-left one. Returns false with `error` set when an attribute cannot be read.
-bool dracoPrimitive(const draco::Mesh& mesh, const draco::PointAttribute* position,
-                    const draco::PointAttribute* uv, const draco::PointAttribute* color,
-                    bool flip_v, Primitive& prim, std::string& error) {
+bool dracoPrimitive(const draco::Mesh& mesh, const draco::PointAttribute* position, const draco::PointAttribute* uv,
+                    const draco::PointAttribute* color, bool flip_v, Primitive& prim, std::string& error) {
   const uint32_t points = mesh.num_points();
-  if (!position || position->num_components() < 3 ||
-      !readDracoAttribute(*position, points, 3, prim.positions)) {
+  if (!position || position->num_components() < 3 || !readDracoAttribute(*position, points, 3, prim.positions)) {
     error = "Draco mesh has no readable 3-component POSITION attribute";
     return false;
   }
@@ -222,11 +222,10 @@ bool dracoPrimitive(const draco::Mesh& mesh, const draco::PointAttribute* positi
       return false;
     }
     // Floats and normalized integers are 0..1; other 8-bit values are 0..255, 16-bit 0..65535.
-    const bool integral = color->data_type() != draco::DT_FLOAT32 &&
-                          color->data_type() != draco::DT_FLOAT64;
-    const float scale = !integral || color->normalized()          ? 255.0f
+    const bool integral = color->data_type() != draco::DT_FLOAT32 && color->data_type() != draco::DT_FLOAT64;
+    const float scale = !integral || color->normalized()         ? 255.0f
                         : color->data_type() == draco::DT_UINT16 ? 1.0f / 257.0f
-                                                                  : 1.0f;
+                                                                 : 1.0f;
     prim.colors.resize(values.size());
     for (size_t i = 0; i < values.size(); ++i) {
       const bool alpha = i % 4 == 3;
@@ -247,7 +246,7 @@ bool dracoPrimitive(const draco::Mesh& mesh, const draco::PointAttribute* positi
 // its entry point.
 struct GltfFailure {
   ErrorCode code;
-  std::string message;    ///< Without the file path, unless `has_path`.
+  std::string message;  ///< Without the file path, unless `has_path`.
   bool has_path = false;
 };
 
@@ -277,8 +276,7 @@ Mat4 multiply(const Mat4& a, const Mat4& b) {
 }
 
 double determinant3(const Mat4& m) {
-  return m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) +
-         m[8] * (m[1] * m[6] - m[5] * m[2]);
+  return m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) + m[8] * (m[1] * m[6] - m[5] * m[2]);
 }
 
 std::string percentDecode(const std::string& uri) {
@@ -295,21 +293,25 @@ std::string percentDecode(const std::string& uri) {
   return out;
 }
 
-// Decodes the payload of a base64 data URI; false on characters outside the alphabet.
+// Decodes the payload of a base64 data URI (standard or URL-safe alphabet); false on other
+// characters.
 bool decodeBase64(std::string_view text, std::vector<uint8_t>& out) {
+  const auto sextet = [](char ch) {
+    if (ch >= 'A' && ch <= 'Z') return ch - 'A';
+    if (ch >= 'a' && ch <= 'z') return ch - 'a' + 26;
+    if (ch >= '0' && ch <= '9') return ch - '0' + 52;
+    if (ch == '+' || ch == '-') return 62;
+    if (ch == '/' || ch == '_') return 63;
+    return -1;
+  };
   out.clear();
   out.reserve(text.size() / 4 * 3);
   uint32_t acc = 0;
   int bits = 0;
   for (char ch : text) {
-    int v;
-    if (ch >= 'A' && ch <= 'Z') v = ch - 'A';
-    else if (ch >= 'a' && ch <= 'z') v = ch - 'a' + 26;
-    else if (ch >= '0' && ch <= '9') v = ch - '0' + 52;
-    else if (ch == '+' || ch == '-') v = 62;
-    else if (ch == '/' || ch == '_') v = 63;
-    else if (ch == '=') break;
-    else return false;
+    if (ch == '=') break;
+    const int v = sextet(ch);
+    if (v < 0) return false;
     acc = (acc << 6) | static_cast<uint32_t>(v);
     bits += 6;
     if (bits >= 8) {
@@ -326,8 +328,7 @@ uint32_t readLe32(const uint8_t* p) {
 
 class GltfReader {
  public:
-  GltfReader(const std::string& path, const std::vector<uint8_t>& file,
-             std::vector<std::string>& warnings)
+  GltfReader(const std::string& path, const std::vector<uint8_t>& file, std::vector<std::string>& warnings)
       : path_(path), dir_(fs::path(path).parent_path()), warnings_(warnings), file_(file) {}
 
   Model read() {
@@ -392,8 +393,13 @@ class GltfReader {
     if (!version || !version->is_string()) fail("glTF has no asset.version");
     const std::string v = version->get<std::string>();
     if (v.rfind("2.", 0) != 0) fail("glTF version '" + v + "' is not supported (need 2.x)", ErrorCode::kUnsupported);
-    static const char* const kHandled[] = {"KHR_draco_mesh_compression", "KHR_mesh_quantization",
-                                           "KHR_materials_unlit", "KHR_texture_transform"};
+    static const char* const kHandled[] = {"KHR_draco_mesh_compression", "KHR_mesh_quantization", "KHR_materials_unlit",
+                                           "KHR_texture_transform"};
+    for (const json& name : array(root_, "extensionsUsed")) {
+      if (name == "KHR_texture_transform") {
+        warnings_.push_back(path_ + ": KHR_texture_transform is ignored; textures may be misplaced");
+      }
+    }
     for (const json& name : array(root_, "extensionsRequired")) {
       if (!name.is_string()) fail("extensionsRequired holds a non-string");
       if (std::find(std::begin(kHandled), std::end(kHandled), name.get<std::string>()) == std::end(kHandled)) {
@@ -475,7 +481,9 @@ class GltfReader {
       const json* uri = find(buffers[i], "uri");
       if (!uri) {
         if (i != 0 || !has_bin_) fail(context + " has no uri and there is no GLB BIN chunk");
-        if (length > bin_.size) fail(fmt::format("{} says {} bytes but the GLB BIN chunk has {}", context, length, bin_.size));
+        if (length > bin_.size) {
+          fail(fmt::format("{} says {} bytes but the GLB BIN chunk has {}", context, length, bin_.size));
+        }
         buffers_.push_back(Span{bin_.data, static_cast<size_t>(length)});
         continue;
       }
@@ -503,8 +511,8 @@ class GltfReader {
     const uint64_t offset = number(v, "byteOffset", 0, context);
     const uint64_t length = number(v, "byteLength", std::nullopt, context);
     if (offset > buffers_[buffer].size || length > buffers_[buffer].size - offset) {
-      fail(fmt::format("{} (offset {}, {} bytes) runs past the end of buffer {} ({} bytes)", context,
-                       offset, length, buffer, buffers_[buffer].size));
+      fail(fmt::format("{} (offset {}, {} bytes) runs past the end of buffer {} ({} bytes)", context, offset, length,
+                       buffer, buffers_[buffer].size));
     }
     return View{Span{buffers_[buffer].data + offset, static_cast<size_t>(length)}, number(v, "byteStride", 0, context)};
   }
@@ -520,10 +528,17 @@ class GltfReader {
 
   static int componentSize(int type) {
     switch (type) {
-      case 5120: case 5121: return 1;
-      case 5122: case 5123: return 2;
-      case 5125: case 5126: return 4;
-      default: return 0;
+      case 5120:
+      case 5121:
+        return 1;
+      case 5122:
+      case 5123:
+        return 2;
+      case 5125:
+      case 5126:
+        return 4;
+      default:
+        return 0;
     }
   }
 
@@ -532,7 +547,8 @@ class GltfReader {
     const std::string context = fmt::format("accessor {}", i);
     Accessor out;
     out.count = static_cast<size_t>(std::min<uint64_t>(number(a, "count", std::nullopt, context), SIZE_MAX / 64));
-    out.component_type = static_cast<int>(std::min<uint64_t>(number(a, "componentType", std::nullopt, context), 1 << 16));
+    out.component_type =
+        static_cast<int>(std::min<uint64_t>(number(a, "componentType", std::nullopt, context), 1 << 16));
     const json* normalized = find(a, "normalized");
     out.normalized = normalized && normalized->is_boolean() && normalized->get<bool>();
     const json* type = find(a, "type");
@@ -549,11 +565,10 @@ class GltfReader {
     const uint64_t element_size = uint64_t(size) * out.components;
     out.stride = static_cast<size_t>(view.stride ? view.stride : element_size);
     if (out.stride < element_size || out.stride > 255) fail(fmt::format("{} has byteStride {}", context, out.stride));
-    if (out.count == 0 || offset > view.bytes.size ||
-        (out.count - 1) > (view.bytes.size - offset) / out.stride ||
+    if (out.count == 0 || offset > view.bytes.size || (out.count - 1) > (view.bytes.size - offset) / out.stride ||
         offset + (out.count - 1) * out.stride + element_size > view.bytes.size) {
-      fail(fmt::format("{} ({} elements of {} bytes from offset {}) does not fit its {}-byte bufferView",
-                       context, out.count, element_size, offset, view.bytes.size));
+      fail(fmt::format("{} ({} elements of {} bytes from offset {}) does not fit its {}-byte bufferView", context,
+                       out.count, element_size, offset, view.bytes.size));
     }
     out.data = view.bytes.data + offset;
     return out;
@@ -571,12 +586,36 @@ class GltfReader {
       for (int c = 0; c < a.components; ++c) {
         float v = 0;
         switch (a.component_type) {
-          case 5126: std::memcpy(&v, p + 4 * c, 4); break;
-          case 5120: { int8_t x; std::memcpy(&x, p + c, 1); v = a.normalized ? std::max(x / 127.0f, -1.0f) : x; break; }
-          case 5121: v = a.normalized ? p[c] / 255.0f : p[c]; break;
-          case 5122: { int16_t x; std::memcpy(&x, p + 2 * c, 2); v = a.normalized ? std::max(x / 32767.0f, -1.0f) : x; break; }
-          case 5123: { uint16_t x; std::memcpy(&x, p + 2 * c, 2); v = a.normalized ? x / 65535.0f : x; break; }
-          case 5125: { uint32_t x; std::memcpy(&x, p + 4 * c, 4); v = static_cast<float>(x); break; }
+          case 5126:
+            std::memcpy(&v, p + 4 * c, 4);
+            break;
+          case 5120: {
+            int8_t x;
+            std::memcpy(&x, p + c, 1);
+            v = a.normalized ? std::max(x / 127.0f, -1.0f) : x;
+            break;
+          }
+          case 5121:
+            v = a.normalized ? p[c] / 255.0f : p[c];
+            break;
+          case 5122: {
+            int16_t x;
+            std::memcpy(&x, p + 2 * c, 2);
+            v = a.normalized ? std::max(x / 32767.0f, -1.0f) : x;
+            break;
+          }
+          case 5123: {
+            uint16_t x;
+            std::memcpy(&x, p + 2 * c, 2);
+            v = a.normalized ? x / 65535.0f : x;
+            break;
+          }
+          case 5125: {
+            uint32_t x;
+            std::memcpy(&x, p + 4 * c, 4);
+            v = static_cast<float>(x);
+            break;
+          }
         }
         out[e * a.components + c] = v;
       }
@@ -592,9 +631,15 @@ class GltfReader {
     std::vector<uint32_t> out(a.count);
     for (size_t e = 0; e < a.count; ++e) {
       const uint8_t* p = a.data + e * a.stride;
-      if (a.component_type == 5121) out[e] = *p;
-      else if (a.component_type == 5123) { uint16_t x; std::memcpy(&x, p, 2); out[e] = x; }
-      else std::memcpy(&out[e], p, 4);
+      if (a.component_type == 5121) {
+        out[e] = *p;
+      } else if (a.component_type == 5123) {
+        uint16_t x;
+        std::memcpy(&x, p, 2);
+        out[e] = x;
+      } else {
+        std::memcpy(&out[e], p, 4);
+      }
     }
     return out;
   }
@@ -609,7 +654,9 @@ class GltfReader {
     const json* pbr = find(m, "pbrMetallicRoughness");
     if (!pbr) return out;
     if (const json* factor = find(*pbr, "baseColorFactor")) {
-      if (!factor->is_array() || factor->size() != 4) fail(fmt::format("material {}: baseColorFactor is not 4 numbers", i));
+      if (!factor->is_array() || factor->size() != 4) {
+        fail(fmt::format("material {}: baseColorFactor is not 4 numbers", i));
+      }
       for (int k = 0; k < 4; ++k) {
         if (!(*factor)[k].is_number()) fail(fmt::format("material {}: baseColorFactor is not 4 numbers", i));
         const float c = (*factor)[k].get<float>();
@@ -630,7 +677,8 @@ class GltfReader {
   int texture(size_t t, const std::string& material) {
     const json& tex = element(root_, "textures", t);
     if (!find(tex, "source")) {
-      warnings_.push_back(oneLine(fmt::format("{}: material '{}': texture {} has no PNG/JPEG source; using the base colour", path_, material, t)));
+      warnings_.push_back(oneLine(fmt::format(
+          "{}: material '{}': texture {} has no PNG/JPEG source; using the base colour", path_, material, t)));
       return -1;
     }
     const size_t image = index(tex, "source", array(root_, "images").size(), fmt::format("texture {}", t));
@@ -649,20 +697,23 @@ class GltfReader {
       auto loaded = loadUri(uri->get<std::string>(), fmt::format("image {}", image), &file_name);
       out.name = file_name.empty() ? fmt::format("image {} (data URI)", image) : file_name;
       if (!loaded) {
-        warnings_.push_back(oneLine(fmt::format("{}: texture file '{}' not found; using the base colour", context, file_name)));
+        warnings_.push_back(
+            oneLine(fmt::format("{}: texture file '{}' not found; using the base colour", context, file_name)));
         return -1;
       }
       owned = std::move(*loaded);
       bytes = Span{owned.data(), owned.size()};
     } else if (find(img, "bufferView")) {
-      bytes = bufferView(index(img, "bufferView", array(root_, "bufferViews").size(), fmt::format("image {}", image))).bytes;
+      bytes = bufferView(index(img, "bufferView", array(root_, "bufferViews").size(), fmt::format("image {}", image)))
+                  .bytes;
       out.name = fmt::format("image {} (embedded)", image);
     } else {
       fail(fmt::format("image {} has neither uri nor bufferView", image));
     }
     std::string error;
     if (!decodeTexture(bytes.data, bytes.size, out, error)) {
-      warnings_.push_back(oneLine(fmt::format("{}: '{}' cannot be decoded ({}); using the base colour", context, out.name, error)));
+      warnings_.push_back(
+          oneLine(fmt::format("{}: '{}' cannot be decoded ({}); using the base colour", context, out.name, error)));
       return -1;
     }
     model_.textures.push_back(std::move(out));
@@ -670,10 +721,11 @@ class GltfReader {
     return slot;
   }
 
+  // glTF's default material for primitives that name none: white, untextured.
   int defaultMaterial() {
     if (default_material_ < 0) {
       default_material_ = static_cast<int>(model_.materials.size());
-      model_.materials.push_back(Material{"default"});
+      model_.materials.push_back(Material{"default", {1.0f, 1.0f, 1.0f, 1.0f}, -1});
     }
     return default_material_;
   }
@@ -683,7 +735,8 @@ class GltfReader {
   Primitive primitive(const json& p, const std::string& context) {
     Primitive prim;
     const size_t materials = array(root_, "materials").size();
-    prim.material = find(p, "material") ? static_cast<int>(index(p, "material", materials, context)) : defaultMaterial();
+    prim.material =
+        find(p, "material") ? static_cast<int>(index(p, "material", materials, context)) : defaultMaterial();
     const int set = prim.material < static_cast<int>(texcoord_sets_.size()) ? texcoord_sets_[prim.material] : 0;
     const std::string uv_name = fmt::format("TEXCOORD_{}", set);
     const json* attributes = find(p, "attributes");
@@ -721,7 +774,8 @@ class GltfReader {
   }
 
   void dracoPrimitive(const json& ext, const std::string& uv_name, const std::string& context, Primitive& prim) {
-    const View view = bufferView(index(ext, "bufferView", array(root_, "bufferViews").size(), context + " Draco extension"));
+    const View view =
+        bufferView(index(ext, "bufferView", array(root_, "bufferViews").size(), context + " Draco extension"));
     std::string error;
     bool unsupported = false;
     const auto mesh = decodeDracoMesh(view.bytes.data, view.bytes.size, error, unsupported);
@@ -731,13 +785,15 @@ class GltfReader {
     const auto attribute = [&](const char* name) -> const draco::PointAttribute* {
       if (!find(*ids, name)) return nullptr;
       const uint64_t id = number(*ids, name, std::nullopt, context + " Draco attributes");
-      const draco::PointAttribute* att = id <= UINT32_MAX ? mesh->GetAttributeByUniqueId(static_cast<uint32_t>(id)) : nullptr;
+      const draco::PointAttribute* att =
+          id <= UINT32_MAX ? mesh->GetAttributeByUniqueId(static_cast<uint32_t>(id)) : nullptr;
       if (!att) fail(fmt::format("{}: Draco attribute {} (id {}) is not in the stream", context, name, id));
       return att;
     };
     const draco::PointAttribute* position = attribute("POSITION");
     if (!position) fail(context + ": Draco extension has no POSITION");
-    if (!model_detail::dracoPrimitive(*mesh, position, attribute(uv_name.c_str()), attribute("COLOR_0"), false, prim, error)) {
+    if (!model_detail::dracoPrimitive(*mesh, position, attribute(uv_name.c_str()), attribute("COLOR_0"), false, prim,
+                                      error)) {
       fail(context + ": " + error);
     }
   }
@@ -759,14 +815,14 @@ class GltfReader {
       Primitive prim = primitive(primitives[i], context);
       std::vector<uint32_t> list;
       const std::vector<uint32_t>& idx = prim.indices;
-      if (mode == 4) {
+      const json* extensions = find(primitives[i], "extensions");
+      if (mode == 4 || (extensions && find(*extensions, "KHR_draco_mesh_compression"))) {  // Draco decodes to a list
         prim.indices.resize(idx.size() / 3 * 3);
       } else {
         for (size_t k = 2; k < idx.size(); ++k) {
           const bool strip = mode == 5;
           const uint32_t a = strip ? idx[k - 2] : idx[0], b = idx[k - 1], c = idx[k];
-          if (strip && (k % 2)) list.insert(list.end(), {b, a, c});
-          else list.insert(list.end(), {a, b, c});
+          list.insert(list.end(), {strip && k % 2 ? b : a, strip && k % 2 ? a : b, c});  // keep strips' winding
         }
         prim.indices = std::move(list);
       }
@@ -779,7 +835,9 @@ class GltfReader {
     const auto numbers = [&](const char* key, size_t count, std::vector<double> fallback) {
       const json* value = find(node, key);
       if (!value) return fallback;
-      if (!value->is_array() || value->size() != count) fail(fmt::format("node {}: '{}' is not {} numbers", i, key, count));
+      if (!value->is_array() || value->size() != count) {
+        fail(fmt::format("node {}: '{}' is not {} numbers", i, key, count));
+      }
       std::vector<double> out;
       for (const json& x : *value) {
         if (!x.is_number()) fail(fmt::format("node {}: '{}' is not {} numbers", i, key, count));
@@ -797,8 +855,8 @@ class GltfReader {
     const std::vector<double> q = numbers("rotation", 4, {0, 0, 0, 1});
     const std::vector<double> s = numbers("scale", 3, {1, 1, 1});
     const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    const double x = norm > 0 ? q[0] / norm : 0, y = norm > 0 ? q[1] / norm : 0,
-                 z = norm > 0 ? q[2] / norm : 0, w = norm > 0 ? q[3] / norm : 1;
+    const double x = norm > 0 ? q[0] / norm : 0, y = norm > 0 ? q[1] / norm : 0, z = norm > 0 ? q[2] / norm : 0,
+                 w = norm > 0 ? q[3] / norm : 1;
     const double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w),     2 * (x * z - y * w),
                          2 * (x * y - z * w),     1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
                          2 * (x * z + y * w),     2 * (y * z - x * w),     1 - 2 * (x * x + y * y)};
@@ -819,13 +877,15 @@ class GltfReader {
       for (size_t v = 0; v + 2 < prim.positions.size(); v += 3) {
         const float* p = &prim.positions[v];
         if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-          fail(fmt::format("mesh {} primitive {}: vertex {} has non-finite position ({}, {}, {})",
-                           m, i, v / 3, p[0], p[1], p[2]));
+          fail(fmt::format("mesh {} primitive {}: vertex {} has non-finite position ({}, {}, {})", m, i, v / 3, p[0],
+                           p[1], p[2]));
         }
       }
       for (size_t v = 0; v + 2 < prim.positions.size(); v += 3) {
         const double x = prim.positions[v], y = prim.positions[v + 1], z = prim.positions[v + 2];
-        for (int k = 0; k < 3; ++k) prim.positions[v + k] = static_cast<float>(T[k] * x + T[4 + k] * y + T[8 + k] * z + T[12 + k]);
+        for (int k = 0; k < 3; ++k) {
+          prim.positions[v + k] = static_cast<float>(T[k] * x + T[4 + k] * y + T[8 + k] * z + T[12 + k]);
+        }
       }
       if (mirror) {
         for (size_t k = 0; k + 2 < prim.indices.size(); k += 3) std::swap(prim.indices[k + 1], prim.indices[k + 2]);

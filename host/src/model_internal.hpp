@@ -35,15 +35,13 @@ std::string lowerExtension(const std::string& path);
 
 /// Reads at most `max_bytes` from the start of a file. Errors name the path: kNotFound when it
 /// does not exist, kIoError when it is a directory or cannot be read.
-Result<std::vector<uint8_t>> readFileBytes(const std::string& path,
-                                           uint64_t max_bytes = UINT64_MAX);
+Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max_bytes = UINT64_MAX);
 
 /// Appends `prim` to `model` as one draw range, padding `uvs` (zeros) and `colors` (white) so
 /// they stay parallel to `positions`. Fails (kMalformedInput, message "<path>: <what>: ...")
 /// when an index is not below the primitive's vertex count, or kUnsupported when the model
 /// would exceed kMaxModelElements.
-Status appendPrimitive(Model& model, const Primitive& prim, const std::string& path,
-                       const std::string& what);
+Status appendPrimitive(Model& model, const Primitive& prim, const std::string& path, const std::string& what);
 
 /// Decodes an encoded image (PNG, JPEG, ...) into an RGBA8 texture (rows top to bottom).
 /// Refuses PNG/JPEG headers that claim far more pixels than `size` bytes can encode. Returns
@@ -57,8 +55,7 @@ void updateBounds(Model& model);
 /// Format loaders. Each returns the geometry in the model frame with its materials and
 /// textures; loadModel then checks, places and blocks it. Warnings are one line each and start
 /// with the path.
-Result<Model> loadWithAssimp(const std::string& path, const std::string& ext,
-                             std::vector<std::string>& warnings);
+Result<Model> loadWithAssimp(const std::string& path, const std::string& ext, std::vector<std::string>& warnings);
 bool assimpReadsExtension(const std::string& ext);
 Result<Model> loadDrc(const std::string& path);
 Result<Model> loadGltf(const std::string& path, std::vector<std::string>& warnings);
