@@ -16,6 +16,25 @@ execute_process(COMMAND ${VKLOC} info --model city RESULT_VARIABLE rc OUTPUT_VAR
 if(NOT rc EQUAL 0 OR NOT out MATCHES "triangles: +[0-9]+" OR NOT out MATCHES "blocks:")
   message(FATAL_ERROR "vkloc info failed (${rc}): ${out} ${err}")
 endif()
+# A model file written by `vkloc export` renders through the file loaders (glTF + Draco, OBJ).
+foreach(file city.glb room.obj)
+  string(REGEX REPLACE "\\..*" "" name ${file})
+  execute_process(COMMAND ${VKLOC} export --model ${name} --out ${WORK}/${file} --draco RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "vkloc export ${file} failed (${rc}): ${out} ${err}")
+  endif()
+  execute_process(COMMAND ${VKLOC} render --model ${WORK}/${file} --look-at 0,-20,30,0,0,0 --out ${WORK}/${name}_file
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK}/${name}_file/view000_depth.tiff)
+    message(FATAL_ERROR "vkloc render of exported ${file} failed (${rc}): ${out} ${err}")
+  endif()
+endforeach()
+# Output already written survives a later failure: render two views into a directory, then a
+# failing render (bad pose) must leave them in place.
+execute_process(COMMAND ${VKLOC} render --model room --pose "0 0 1.5 0 0 0 2" --out ${WORK}/room RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(rc EQUAL 0 OR NOT EXISTS ${WORK}/room/view000_rgba.png)
+  message(FATAL_ERROR "a failing render removed earlier output or did not fail (${rc}): ${err}")
+endif()
 # Errors: one line on stderr, non-zero exit, no crash.
 foreach(args "info;--model;${WORK}/missing.obj" "render;--model;room;--pose;1 2 3" "render;--model;room;--intrinsics;0,1,2,3,4,5"
         "render;--model;${WORK}/room/view000_gray.png;--pose;0 0 0 0 0 0 1")
@@ -34,7 +53,7 @@ if(rc EQUAL 0 OR NOT err MATCHES "^vkloc: error: .*mesa-vulkan-drivers" OR err M
   message(FATAL_ERROR "vkloc devices without a driver: expected a one-line error, got rc=${rc} stderr='${err}'")
 endif()
 # --help for every verb.
-foreach(verb demo render info devices bench)
+foreach(verb demo render info devices bench export)
   execute_process(COMMAND ${VKLOC} ${verb} --help RESULT_VARIABLE rc OUTPUT_VARIABLE out)
   if(NOT rc EQUAL 0 OR NOT out MATCHES "Usage|OPTIONS|Options")
     message(FATAL_ERROR "vkloc ${verb} --help failed (${rc}): ${out}")

@@ -73,5 +73,6 @@ void addInfoVerb(CLI::App& app);
 void addDevicesVerb(CLI::App& app);
 void addBenchVerb(CLI::App& app);
 void addDemoVerb(CLI::App& app);
+void addExportVerb(CLI::App& app);
 
 }  // namespace vkloc::cli

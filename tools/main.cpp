@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
   vkloc::cli::addInfoVerb(app);
   vkloc::cli::addDevicesVerb(app);
   vkloc::cli::addBenchVerb(app);
+  vkloc::cli::addExportVerb(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
