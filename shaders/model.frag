@@ -15,7 +15,7 @@ layout(location = 1) in vec4 in_color;
 
 layout(location = 0) out vec4 out_color;
 layout(location = 1) out float out_depth;   // camera z, metres
-layout(location = 2) out vec2 out_normal;   // octahedral camera-frame normal
+layout(location = 2) out uint out_normal;   // octahedral camera-frame normal, packSnorm2x16
 
 void main() {
   vec4 c = pc.base_color * in_color;
@@ -33,6 +33,6 @@ void main() {
     vec3 p = vec3((uv_px - pc.intrinsics.zw) / pc.intrinsics.xy * z, z);
     vec3 n = normalize(cross(dFdx(p), dFdy(p)));
     if (dot(n, p) > 0.0) n = -n;
-    out_normal = octEncode(n);
+    out_normal = packSnorm2x16(octEncode(n));
   }
 }

@@ -112,7 +112,7 @@ GpuDeviceInfo describe(VkPhysicalDevice pd, int index) {
   if (!formatSupports(pd, VK_FORMAT_D32_SFLOAT, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT)) {
     problems.push_back("no D32_SFLOAT depth attachment");
   }
-  for (VkFormat f : {VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_R32_SFLOAT, VK_FORMAT_R16G16_SFLOAT}) {
+  for (VkFormat f : {VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_R32_SFLOAT, VK_FORMAT_R32_UINT}) {
     if (!formatSupports(pd, f, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT)) {
       problems.push_back(fmt::format("format {} not renderable", static_cast<int>(f)));
     }

@@ -28,7 +28,7 @@ namespace {
 
 constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kLinearDepthFormat = VK_FORMAT_R32_SFLOAT;
-constexpr VkFormat kNormalFormat = VK_FORMAT_R16G16_SFLOAT;  // octahedral
+constexpr VkFormat kNormalFormat = VK_FORMAT_R32_UINT;  // octahedral, packSnorm2x16
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;      // reverse-Z
 
 // Interleaved per-vertex attributes of binding 1 (binding 0 holds positions alone, so
@@ -38,25 +38,6 @@ struct VertexAttributes {
   uint8_t rgba[4];
 };
 static_assert(sizeof(VertexAttributes) == 12);
-
-float halfToFloatSlow(uint16_t h) {
-  const uint32_t sign = (h >> 15) & 1u, exp = (h >> 10) & 0x1fu, mant = h & 0x3ffu;
-  float v;
-  if (exp == 0) v = std::ldexp(static_cast<float>(mant), -24);
-  else if (exp == 31) v = mant ? NAN : INFINITY;
-  else v = std::ldexp(static_cast<float>(mant | 0x400u), static_cast<int>(exp) - 25);
-  return sign ? -v : v;
-}
-
-// All 65536 half-float values, so readback decodes with one load per value.
-const std::vector<float>& halfTable() {
-  static const std::vector<float> table = [] {
-    std::vector<float> t(65536);
-    for (uint32_t i = 0; i < 65536; ++i) t[i] = halfToFloatSlow(static_cast<uint16_t>(i));
-    return t;
-  }();
-  return table;
-}
 
 // Inverse of octEncode in shaders/include/octahedral.glsl.
 void octDecode(float ex, float ey, float out[3]) {
@@ -533,7 +514,7 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
   VKLOC_VK(vkBeginCommandBuffer(cmd, &begin));
   VkClearValue clears[4]{};
   for (int k = 0; k < 4; ++k) clears[0].color.float32[k] = settings.background_rgba[k] / 255.0f;
-  clears[1].color.float32[0] = kBackgroundDepth;
+  clears[1].color.float32[0] = kBackgroundDepth;  // clears[2] (normals, uint) stays 0
   const uint32_t nclear = normals ? 4 : 3;
   clears[nclear - 1].depthStencil = {0.0f, 0};  // reverse-Z: 0 is infinitely far
   VkRenderPassBeginInfo rpbi{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
@@ -625,10 +606,13 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
   out.gray = rgbaToGray(out.rgba);
   if (normals) {
     out.normals = ImageF32(iw, ih, 3, 0.0f);
-    const float* half = halfTable().data();
+    // unpackSnorm2x16: low half is x, high half is y, each clamp(v / 32767, -1, 1).
+    const auto* words = reinterpret_cast<const int16_t*>(enc);
+    constexpr float kScale = 1.0f / 32767.0f;
     for (VkDeviceSize i = 0; i < pixels; ++i) {
       if (out.depth.data[i] == kBackgroundDepth) continue;
-      octDecode(half[enc[2 * i]], half[enc[2 * i + 1]], &out.normals.data[i * 3]);
+      octDecode(std::max(-1.0f, words[2 * i] * kScale), std::max(-1.0f, words[2 * i + 1] * kScale),
+                &out.normals.data[i * 3]);
     }
   }
   return out;
