@@ -35,8 +35,19 @@ execute_process(COMMAND ${VKLOC} render --model room --pose "0 0 1.5 0 0 0 2" --
 if(rc EQUAL 0 OR NOT EXISTS ${WORK}/room/view000_rgba.png)
   message(FATAL_ERROR "a failing render removed earlier output or did not fail (${rc}): ${err}")
 endif()
+# The README's main job, and render variants.
+execute_process(COMMAND ${VKLOC} demo --out ${WORK}/demo RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "view 0: +[0-9.]+ ms" OR NOT EXISTS ${WORK}/demo/city/view00_depth.tiff OR NOT err STREQUAL "")
+  message(FATAL_ERROR "vkloc demo failed (${rc}): ${out} ${err}")
+endif()
+execute_process(COMMAND ${VKLOC} render --model city --no-normals --cull --out ${WORK}/variants
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT err STREQUAL "" OR EXISTS ${WORK}/variants/view000_normals.png OR NOT EXISTS ${WORK}/variants/view000_rgba.png)
+  message(FATAL_ERROR "vkloc render --no-normals --cull failed (${rc}): ${out} ${err}")
+endif()
 # Errors: one line on stderr, non-zero exit, no crash.
-foreach(args "info;--model;${WORK}/missing.obj" "render;--model;room;--pose;1 2 3" "render;--model;room;--intrinsics;0,1,2,3,4,5"
+foreach(args "bench;render;--runs;0" "render;--bogus" "render;--pose" "info;--block-triangles;-1" "frobnicate" ""
+        "render;--model;room;--near;nan" "render;--model;room;--far;inf" "render;--model;room;--intrinsics;1,1,1,1,1e20,5" "info;--model;${WORK}/missing.obj" "render;--model;room;--pose;1 2 3" "render;--model;room;--intrinsics;0,1,2,3,4,5"
         "render;--model;${WORK}/room/view000_gray.png;--pose;0 0 0 0 0 0 1")
   execute_process(COMMAND ${VKLOC} ${args} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   string(STRIP "${err}" err)

@@ -363,14 +363,18 @@ TEST_F(GpuRender, DracoEncodedModelRendersLikeItsSource) {
   }
 }
 
-TEST_F(GpuRender, CopyAndDirectReadbackAgree) {
-  // The staging-copy path (discrete GPUs) and the direct linear-image path (unified memory)
-  // produce identical outputs.
+TEST_F(GpuRender, StagingAndDirectMemoryPathsAgree) {
+  // The discrete-GPU path (device-local buffers filled through staging copies, targets copied
+  // to a readback buffer) and the unified-memory path (mapped buffers, linear targets read
+  // directly) produce identical outputs, with normals and without.
   auto room = makeDemoModel("room");
   ASSERT_TRUE(room.ok());
-  GpuRendererOptions copy;
-  copy.direct_readback = false;
-  auto a = GpuRenderer::create(context_, *room, copy);
+  GpuOptions staging_options;
+  staging_options.validation = 1;
+  staging_options.force_staging = true;
+  auto staging_context = GpuContext::create(staging_options);
+  ASSERT_TRUE(staging_context.ok());
+  auto a = GpuRenderer::create(*staging_context, *room);
   auto b = GpuRenderer::create(context_, *room);
   ASSERT_TRUE(a.ok() && b.ok());
   const Pose T = demoViewpoints("room").back();
@@ -381,6 +385,15 @@ TEST_F(GpuRender, CopyAndDirectReadbackAgree) {
   EXPECT_EQ(ra->gray.data, rb->gray.data);
   EXPECT_EQ(ra->depth.data, rb->depth.data);
   EXPECT_EQ(ra->normals.data, rb->normals.data);
+  RenderSettings no_normals;
+  no_normals.outputs = kRenderColor | kRenderDepth;
+  auto na = (*a)->render(vga(), T, no_normals);
+  auto nb = (*b)->render(vga(), T, no_normals);
+  ASSERT_TRUE(na.ok() && nb.ok());
+  EXPECT_TRUE(na->normals.empty());
+  EXPECT_EQ(na->depth.data, ra->depth.data);
+  EXPECT_EQ(na->rgba.data, nb->rgba.data);
+  EXPECT_EQ((*staging_context)->validationMessages(), 0u);
 }
 
 }  // namespace

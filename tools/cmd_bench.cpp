@@ -46,7 +46,7 @@ void roughen(Model& model, double amplitude) {
       model.positions[i + k] += static_cast<float>(amplitude * hash(x, y, z, k));
     }
   }
-  buildBlocks(model, 32768);  // recompute bounds
+  buildBlocks(model, 32768);  // block and model bounds follow the moved vertices
 }
 
 struct Stats {
@@ -54,6 +54,7 @@ struct Stats {
 };
 
 Stats stats(std::vector<double> v) {
+  if (v.empty()) return {};
   std::sort(v.begin(), v.end());
   auto q = [&](double f) { return v[std::min(v.size() - 1, static_cast<size_t>(f * (v.size() - 1) + 0.5))]; };
   return {q(0.5), q(0.1), q(0.9)};
@@ -136,9 +137,12 @@ void addBenchVerb(CLI::App& app) {
   args->device.add(*render);
   args->camera.add(*render);
   render->add_option("--triangles", args->triangles, "Model sizes (triangles)")->delimiter(',')->capture_default_str();
-  render->add_option("--runs", args->runs, "Timed runs per case")->capture_default_str();
-  render->add_option("--warmup", args->warmup, "Untimed runs first (JIT, caches)")->capture_default_str();
+  render->add_option("--runs", args->runs, "Timed runs per case")->check(CLI::Range(1, 100000))->capture_default_str();
+  render->add_option("--warmup", args->warmup, "Untimed runs first (JIT, caches)")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
   render->add_option("--reference-runs", args->reference_runs, "CPU reference runs (models up to 200k triangles)")
+      ->check(CLI::Range(0, 1000))
       ->capture_default_str();
   render->add_flag("!--no-cull", args->cull, "Disable back-face culling");
   render->add_option("--roughness", args->roughness_m,

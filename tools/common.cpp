@@ -1,5 +1,6 @@
 #include "common.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -62,6 +63,14 @@ PinholeCamera CameraArgs::get() const {
     double v[6];
     for (double& x : v) {
       if (!(in >> x)) throw Failure{fmt::format("--intrinsics '{}': expected fx,fy,cx,cy,width,height", intrinsics)};
+    }
+    std::string extra;
+    if (in >> extra) throw Failure{fmt::format("--intrinsics '{}': expected exactly 6 numbers", intrinsics)};
+    for (int k = 4; k < 6; ++k) {
+      if (!(v[k] >= 1 && v[k] <= 16384) || v[k] != std::floor(v[k])) {
+        throw Failure{fmt::format("--intrinsics: image {} must be a whole number of pixels in 1..16384, got {}",
+                                  k == 4 ? "width" : "height", v[k])};
+      }
     }
     cam = PinholeCamera{v[0], v[1], v[2], v[3], static_cast<int>(v[4]), static_cast<int>(v[5])};
   }

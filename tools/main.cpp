@@ -1,9 +1,13 @@
 // vkloc: command-line entry point. One verb per file in tools/.
 #include <cstdio>
 
+#include <opencv2/core/utils/logger.hpp>
+
 #include "common.hpp"
 
 int main(int argc, char** argv) {
+  // Errors are reported once, as one line, by vkloc itself.
+  cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
   CLI::App app{"vkloc: model-based camera localization with Vulkan"};
   app.require_subcommand(1);
   app.set_help_all_flag("--help-all", "Help for every command");
@@ -15,8 +19,13 @@ int main(int argc, char** argv) {
   vkloc::cli::addExportVerb(app);
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "vkloc: error: %s (see 'vkloc --help')\n", e.what());
+    return 2;
   } catch (const vkloc::cli::Failure& f) {
     std::fprintf(stderr, "vkloc: error: %s\n", f.message.c_str());
     return 1;

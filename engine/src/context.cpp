@@ -325,7 +325,7 @@ Result<std::shared_ptr<GpuContext>> GpuContext::create(const GpuOptions& options
   }
 
   // Unified memory: every device-local type is also host-visible.
-  impl->unified_memory = true;
+  impl->unified_memory = !options.force_staging;
   for (uint32_t i = 0; i < impl->memory_properties.memoryTypeCount; ++i) {
     const VkMemoryPropertyFlags f = impl->memory_properties.memoryTypes[i].propertyFlags;
     if ((f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) && !(f & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)) {
@@ -506,6 +506,16 @@ Status GpuContext::Impl::upload(engine::Buffer& dst, const void* data, VkDeviceS
   return runOnce([&](VkCommandBuffer cmd) {
     VkBufferCopy region{0, 0, size};
     vkCmdCopyBuffer(cmd, staging->buffer.get(), dst.buffer.get(), 1, &region);
+    // Make the copy visible to every later reader of the buffer (a fence wait alone is not a
+    // memory dependency between submissions).
+    VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    mb.dstAccessMask = VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_INDEX_READ_BIT | VK_ACCESS_SHADER_READ_BIT |
+                       VK_ACCESS_UNIFORM_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                         VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT |
+                             VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                         0, 1, &mb, 0, nullptr, 0, nullptr);
   });
 }
 

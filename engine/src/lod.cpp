@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <meshoptimizer.h>
 
@@ -74,14 +75,16 @@ LodModel buildLodModel(const Model& model, int max_levels) {
       if (prev.triangles < 64) break;
       LodLevel next;
       next.first_draw = static_cast<uint32_t>(lod.draws.size());
-      next.error_m = prev.error_m;
+      next.error_m = 0.0;
+      const size_t indices_before = lod.indices.size();
       for (uint32_t d = prev.first_draw; d < prev.first_draw + prev.draw_count; ++d) {
         const LodDraw src = lod.draws[d];
         const size_t target = (src.index_count / 4) / 3 * 3;
         const auto first = static_cast<uint32_t>(lod.indices.size());
         const double err = simplifyRange(&lod.indices[src.first_index], src.index_count, model, target, c, lod.indices);
         const auto count = static_cast<uint32_t>(lod.indices.size()) - first;
-        next.error_m = std::max(next.error_m, err);
+        // Errors against full detail accumulate over successive simplifications.
+        next.error_m = std::max(next.error_m, prev.error_m + err);
         next.triangles += count / 3;
         if (count > 0) lod.draws.push_back({first, count, src.material});
       }
@@ -89,6 +92,7 @@ LodModel buildLodModel(const Model& model, int max_levels) {
       if (next.triangles * 10 > prev.triangles * 7) {
         // Less than 30 % fewer triangles: not worth a level; drop what was appended.
         lod.draws.resize(next.first_draw);
+        lod.indices.resize(indices_before);
         break;
       }
       block.levels.push_back(next);
@@ -98,10 +102,11 @@ LodModel buildLodModel(const Model& model, int max_levels) {
   return lod;
 }
 
-int selectLodLevel(const LodBlock& block, double distance_m, double focal_px, double max_error_px) {
-  if (max_error_px <= 0.0 || distance_m <= 0.0) return 0;
-  // A surface deviation of e metres at distance d projects to at most e * f / d pixels.
-  const double max_error_m = max_error_px * distance_m / focal_px;
+int selectLodLevel(const LodBlock& block, double depth_m, double pixels_per_metre_at_1m, double max_error_px) {
+  if (max_error_px <= 0.0 || depth_m <= 0.0) return 0;
+  // A surface deviation of e metres at camera depth z projects to at most
+  // e * pixels_per_metre_at_1m / z pixels.
+  const double max_error_m = max_error_px * depth_m / pixels_per_metre_at_1m;
   int chosen = 0;
   for (size_t i = 1; i < block.levels.size(); ++i) {
     if (block.levels[i].error_m <= max_error_m) chosen = static_cast<int>(i);
@@ -109,15 +114,23 @@ int selectLodLevel(const LodBlock& block, double distance_m, double focal_px, do
   return chosen;
 }
 
-double distanceToBox(const Aabb& box, const double p[3]) {
-  double d2 = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    const double lo = box.min[k] - p[k];
-    const double hi = p[k] - box.max[k];
-    const double e = std::max({lo, hi, 0.0});
-    d2 += e * e;
+double minDepthOfBox(const Aabb& box, const Pose& T_camera_world) {
+  double z_min = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d p((i & 1) ? box.max[0] : box.min[0], (i & 2) ? box.max[1] : box.min[1],
+                            (i & 4) ? box.max[2] : box.min[2]);
+    z_min = std::min(z_min, (T_camera_world * p).z());
   }
-  return std::sqrt(d2);
+  return z_min;
+}
+
+double lodPixelsPerMetre(const PinholeCamera& camera) {
+  // f / z is the magnification on the optical axis; towards the image corners a displacement
+  // perpendicular to the ray is magnified by up to 1 + r^2 / f^2 more (r: corner radius).
+  const double f = std::max(camera.fx, camera.fy);
+  const double du = std::max(camera.cx + 0.5, camera.width - 0.5 - camera.cx) / camera.fx;
+  const double dv = std::max(camera.cy + 0.5, camera.height - 0.5 - camera.cy) / camera.fy;
+  return f * (1.0 + du * du + dv * dv);
 }
 
 }  // namespace vkloc::engine

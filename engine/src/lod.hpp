@@ -4,7 +4,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "vkloc/camera.hpp"
 #include "vkloc/model.hpp"
+#include "vkloc/pose.hpp"
 
 namespace vkloc::engine {
 
@@ -42,11 +44,16 @@ struct LodModel {
 /// the borders of every draw range locked so neighbouring blocks and materials never crack).
 LodModel buildLodModel(const Model& model, int max_levels);
 
-/// Index of the coarsest level of `block` whose geometric error, seen from `distance_m` with
-/// focal length `focal_px`, stays within `max_error_px` pixels; 0 when max_error_px <= 0.
-int selectLodLevel(const LodBlock& block, double distance_m, double focal_px, double max_error_px);
+/// Index of the coarsest level of `block` whose geometric error, seen at camera depth
+/// `depth_m` (the block's nearest), stays within `max_error_px` pixels; 0 when max_error_px
+/// <= 0 or depth_m <= 0 (the block reaches the camera plane).
+int selectLodLevel(const LodBlock& block, double depth_m, double pixels_per_metre_at_1m, double max_error_px);
 
-/// Distance (metres) from a point to an axis-aligned box; 0 inside.
-double distanceToBox(const Aabb& box, const double p[3]);
+/// Smallest camera-frame z (metres) of the box's corners: a lower bound of its points' depth.
+double minDepthOfBox(const Aabb& box, const Pose& T_camera_world);
+
+/// Upper bound of the pixels that one metre perpendicular to a ray at 1 m depth spans anywhere
+/// in the image (focal length, enlarged for off-axis rays).
+double lodPixelsPerMetre(const PinholeCamera& camera);
 
 }  // namespace vkloc::engine

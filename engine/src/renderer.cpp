@@ -293,14 +293,17 @@ Status GpuRenderer::Impl::createRenderPasses() {
     d.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
     d.finalLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
     att.push_back(d);
-    const uint32_t ncolor = with_normals ? 3 : 2;
-    VkAttachmentReference refs[3] = {{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
-                                     {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
-                                     {2, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
-    VkAttachmentReference depth_ref{ncolor, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+    // Three colour slots in both variants; without normals slot 2 is VK_ATTACHMENT_UNUSED so
+    // the fragment shader's normal output is discarded by definition.
+    const uint32_t depth_index = with_normals ? 3 : 2;
+    VkAttachmentReference refs[3] = {
+        {0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
+        {1, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
+        {with_normals ? 2u : VK_ATTACHMENT_UNUSED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
+    VkAttachmentReference depth_ref{depth_index, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
     VkSubpassDescription sub{};
     sub.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
-    sub.colorAttachmentCount = ncolor;
+    sub.colorAttachmentCount = 3;
     sub.pColorAttachments = refs;
     sub.pDepthStencilAttachment = &depth_ref;
     VkSubpassDependency deps[2]{};
@@ -380,7 +383,7 @@ Result<VkPipeline> GpuRenderer::Impl::pipeline(bool normals, bool cull) {
   VkPipelineColorBlendAttachmentState blend[3]{};
   for (auto& b : blend) b.colorWriteMask = 0xf;
   VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-  cb.attachmentCount = normals ? 3 : 2;
+  cb.attachmentCount = 3;
   cb.pAttachments = blend;
   const VkDynamicState dyn_states[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
   VkPipelineDynamicStateCreateInfo dyn{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
@@ -473,13 +476,15 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
     int material;
   };
   std::vector<Draw> draws;
-  const double eye[3] = {T_world_camera.translation().x(), T_world_camera.translation().y(),
-                         T_world_camera.translation().z()};
-  const double focal = std::max(camera.fx, camera.fy);
+  const Pose T_camera_world = T_world_camera.inverse();
+  const double pixels_per_metre = engine::lodPixelsPerMetre(camera);
   for (const engine::LodBlock& b : lod.blocks) {
     if (!aabbInFrustum(b.bounds, camera, T_world_camera, settings.near_m, settings.far_m)) continue;
     const int level_index =
-        engine::selectLodLevel(b, engine::distanceToBox(b.bounds, eye), focal, settings.lod_pixel_error);
+        settings.lod_pixel_error > 0
+            ? engine::selectLodLevel(b, engine::minDepthOfBox(b.bounds, T_camera_world), pixels_per_metre,
+                                     settings.lod_pixel_error)
+            : 0;
     const engine::LodLevel& level = b.levels[static_cast<size_t>(level_index)];
     ++out.blocks_drawn;
     out.triangles_drawn += level.triangles;

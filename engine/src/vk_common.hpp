@@ -59,17 +59,18 @@ class DeviceHandle {
 };
 
 /// A buffer with its own memory, persistently mapped when host-visible.
+// Members are destroyed in reverse order: the memory outlives the objects bound to it.
 struct Buffer {
-  DeviceHandle<VkBuffer> buffer;
   DeviceHandle<VkDeviceMemory> memory;
+  DeviceHandle<VkBuffer> buffer;
   VkDeviceSize size = 0;
   void* mapped = nullptr;  ///< Non-null when host-visible (unmapped by freeing the memory).
 };
 
 /// An image with its own memory and a view.
 struct Image {
-  DeviceHandle<VkImage> image;
   DeviceHandle<VkDeviceMemory> memory;
+  DeviceHandle<VkImage> image;
   DeviceHandle<VkImageView> view;
   VkFormat format = VK_FORMAT_UNDEFINED;
   uint32_t width = 0;

@@ -22,14 +22,15 @@ Status writeAtomic(const std::string& path, const cv::Mat& mat, const std::vecto
       return makeError(ErrorCode::kIoError, fmt::format("{}: cannot write image", path));
     }
   } catch (const cv::Exception& e) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
     return makeError(ErrorCode::kIoError, fmt::format("{}: cannot write image: {}", path, e.what()));
   }
   std::error_code ec;
   fs::rename(tmp, path, ec);
   if (ec) {
-    fs::remove(tmp, ec);
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
     return makeError(ErrorCode::kIoError, fmt::format("{}: cannot rename into place: {}", path, ec.message()));
   }
   return Status::success();

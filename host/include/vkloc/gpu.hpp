@@ -30,8 +30,13 @@ struct GpuOptions {
   /// Enables VK_LAYER_KHRONOS_validation. Default from the environment variable
   /// VKLOC_VALIDATION (1/0); otherwise on in debug builds, off in release builds.
   int validation = -1;
-  /// Called with every validation message; messages are also counted (validationMessages()).
+  /// Prints every validation message to stderr; messages are always counted
+  /// (validationMessages()).
   bool print_validation = true;
+  /// Treats device memory as not host-visible even where it is (lavapipe, integrated GPUs):
+  /// uploads and readback then go through staging copies as on a discrete GPU. For testing
+  /// that path on any device.
+  bool force_staging = false;
 };
 
 /// Owns the Vulkan instance and device. Create once, share between renderers; not thread-safe.
