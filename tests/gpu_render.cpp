@@ -263,17 +263,23 @@ TEST_F(GpuRender, RejectsInvalidInputWithoutCrashing) {
   EXPECT_GT(out->depth.at(50, 40), 0.0f);
 }
 
-TEST_F(GpuRender, RenderOnGpuMatchesStatistics) {
+TEST_F(GpuRender, RenderOnGpuThenReadbackEqualsRender) {
   auto room = makeDemoModel("room");
   ASSERT_TRUE(room.ok());
   auto renderer = GpuRenderer::create(context_, *room);
   ASSERT_TRUE(renderer.ok());
   const Pose T = demoViewpoints("room").front();
+  EXPECT_FALSE((*renderer)->readback().ok());  // nothing rendered yet
   auto a = (*renderer)->render(vga(), T);
   auto b = (*renderer)->renderOnGpu(vga(), T);
   ASSERT_TRUE(a.ok() && b.ok());
   EXPECT_EQ(a->triangles_drawn, b->triangles_drawn);
   EXPECT_TRUE(b->depth.empty());
+  auto c = (*renderer)->readback();
+  ASSERT_TRUE(c.ok());
+  EXPECT_EQ(c->depth.data, a->depth.data);
+  EXPECT_EQ(c->rgba.data, a->rgba.data);
+  EXPECT_EQ(c->normals.data, a->normals.data);
 }
 
 TEST_F(GpuRender, LevelOfDetailStaysWithinItsPixelErrorBound) {

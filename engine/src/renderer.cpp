@@ -124,6 +124,19 @@ struct GpuRenderer::Impl {
   Status ensureTargets(uint32_t width, uint32_t height);
   Result<RenderOutput> render(const PinholeCamera& camera, const Pose& T_world_camera,
                               const RenderSettings& settings, bool readback);
+  /// Records the commands that make the targets readable by the host (barrier or copies).
+  void recordReadback(bool normals);
+  /// Reads the targets of the last render into host images.
+  Result<RenderOutput> readTargets();
+  Result<RenderOutput> readback();
+
+  struct LastFrame {
+    bool valid = false;
+    uint32_t width = 0, height = 0;
+    bool normals = false;
+    uint32_t blocks_drawn = 0, triangles_drawn = 0;
+  };
+  LastFrame last;
 };
 
 Status GpuRenderer::Impl::init(const Model& model, const GpuRendererOptions& options) {
@@ -458,10 +471,7 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
   if (!isValidPose(T_world_camera)) {
     return makeError(ErrorCode::kInvalidArgument, "render: T_world_camera is not a finite rigid transform");
   }
-  if (!(settings.near_m > 0.0) || !(settings.far_m > settings.near_m) || !std::isfinite(settings.far_m)) {
-    return makeError(ErrorCode::kInvalidArgument,
-                     fmt::format("render: need 0 < near < far (near {} m, far {} m)", settings.near_m, settings.far_m));
-  }
+  VKLOC_TRY_STATUS(validateRenderSettings(settings));
   const uint32_t w = static_cast<uint32_t>(camera.width), h = static_cast<uint32_t>(camera.height);
   VKLOC_TRY_STATUS(ensureTargets(w, h));
   const bool normals = (settings.outputs & kRenderNormals) != 0;
@@ -557,14 +567,24 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
   }
   vkCmdEndRenderPass(cmd);
 
+  if (readback) recordReadback(normals);
+  VKLOC_VK(vkEndCommandBuffer(cmd));
+  VKLOC_TRY_STATUS(ctx->submitAndWait(cmd, fence.get()));
+  last = LastFrame{true, w, h, normals, out.blocks_drawn, out.triangles_drawn};
+  if (!readback) return out;
+  return readTargets();
+}
+
+void GpuRenderer::Impl::recordReadback(bool normals) {
+  const uint32_t w = targets.width, h = targets.height;
   const VkDeviceSize pixels = static_cast<VkDeviceSize>(w) * h;
-  if (readback && direct_readback) {
+  if (direct_readback) {
     VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
     mb.srcAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT;
     mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
     vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0,
                          nullptr, 0, nullptr);
-  } else if (readback) {
+  } else {
     VkBufferImageCopy region{};
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     region.imageExtent = {w, h, 1};
@@ -585,10 +605,27 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
     vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr, 0,
                          nullptr);
   }
+}
+
+Result<RenderOutput> GpuRenderer::Impl::readback() {
+  if (!last.valid) return makeError(ErrorCode::kInvalidArgument, "readback: nothing has been rendered yet");
+  VKLOC_VK(vkResetCommandBuffer(cmd, 0));
+  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  VKLOC_VK(vkBeginCommandBuffer(cmd, &begin));
+  recordReadback(last.normals);
   VKLOC_VK(vkEndCommandBuffer(cmd));
   VKLOC_TRY_STATUS(ctx->submitAndWait(cmd, fence.get()));
-  if (!readback) return out;
+  return readTargets();
+}
 
+Result<RenderOutput> GpuRenderer::Impl::readTargets() {
+  const uint32_t w = last.width, h = last.height;
+  const bool normals = last.normals;
+  const VkDeviceSize pixels = static_cast<VkDeviceSize>(w) * h;
+  RenderOutput out;
+  out.blocks_drawn = last.blocks_drawn;
+  out.triangles_drawn = last.triangles_drawn;
   const int iw = static_cast<int>(w), ih = static_cast<int>(h);
   out.rgba = ImageU8(iw, ih, 4);
   out.depth = ImageF32(iw, ih, 1);
@@ -639,6 +676,8 @@ Result<RenderOutput> GpuRenderer::render(const PinholeCamera& camera, const Pose
                                          const RenderSettings& settings) {
   return impl_->render(camera, T_world_camera, settings, true);
 }
+
+Result<RenderOutput> GpuRenderer::readback() { return impl_->readback(); }
 
 Result<RenderOutput> GpuRenderer::renderOnGpu(const PinholeCamera& camera, const Pose& T_world_camera,
                                               const RenderSettings& settings) {

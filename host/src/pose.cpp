@@ -19,8 +19,15 @@ Result<Pose> lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
   const Eigen::Vector3d z = forward.normalized();
   // Right-handed camera frame: x = z cross up is the image's right, y = z cross x points down.
   Eigen::Vector3d x = z.cross(up_world);
-  if (x.norm() < 1e-9) {
-    return makeError(ErrorCode::kInvalidArgument, "lookAt: up direction is parallel to the view direction");
+  if (x.norm() < 1e-6 * up_world.norm()) {
+    // Looking straight along `up` (e.g. a drone camera pointing down): any image "up" is as
+    // good; take the world axis least aligned with the view direction.
+    Eigen::Index axis = 0;
+    z.cwiseAbs().minCoeff(&axis);
+    x = z.cross(Eigen::Vector3d::Unit(axis));
+  }
+  if (x.norm() < 1e-12) {
+    return makeError(ErrorCode::kInvalidArgument, "lookAt: up direction is zero");
   }
   x.normalize();
   const Eigen::Vector3d y = z.cross(x);

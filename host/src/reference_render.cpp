@@ -366,14 +366,7 @@ Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& ca
   if (!isValidPose(T_world_camera)) {
     return makeError(ErrorCode::kInvalidArgument, "renderReference: T_world_camera is not a finite rigid transform");
   }
-  if (!std::isfinite(settings.near_m) || !(settings.near_m > 0)) {
-    return makeError(ErrorCode::kInvalidArgument,
-                     fmt::format("renderReference: near_m = {} must be positive", settings.near_m));
-  }
-  if (!(settings.far_m > settings.near_m)) {
-    return makeError(ErrorCode::kInvalidArgument, fmt::format("renderReference: far_m = {} must exceed near_m = {}",
-                                                              settings.far_m, settings.near_m));
-  }
+  if (Status valid = validateRenderSettings(settings); !valid.ok()) return valid.error();
   if (std::string problem = checkModel(model); !problem.empty()) {
     return makeError(ErrorCode::kInvalidArgument, problem);
   }

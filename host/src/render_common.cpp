@@ -1,9 +1,27 @@
 // Projection and frustum helpers shared by the GPU renderer and the CPU reference.
 #include <cmath>
 
+#include <fmt/format.h>
+
 #include "vkloc/render.hpp"
 
 namespace vkloc {
+
+Status validateRenderSettings(const RenderSettings& s) {
+  if (!(s.near_m >= 1e-6) || !std::isfinite(s.near_m)) {
+    return makeError(ErrorCode::kInvalidArgument, fmt::format("render: near = {} m must be at least 1e-6 m", s.near_m));
+  }
+  if (!(s.far_m > s.near_m) || !std::isfinite(s.far_m) || s.far_m / s.near_m > 1e9) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("render: far = {} m must be finite, above near = {} m and at most 1e9 x near", s.far_m,
+                                 s.near_m));
+  }
+  if (!(s.lod_pixel_error >= 0) || !std::isfinite(s.lod_pixel_error)) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("render: lod_pixel_error = {} must be finite and >= 0", s.lod_pixel_error));
+  }
+  return Status::success();
+}
 
 Eigen::Matrix4d projectionMatrix(const PinholeCamera& camera, double near_m, double far_m) {
   // Seed 001 eqs. 7-8 folded into one matrix for Vulkan clip space (x right, y down, depth

@@ -19,8 +19,8 @@ struct PinholeCamera {
   int height = 480;   ///< Image height, pixels.
 };
 
-/// Checks that focal lengths are finite and positive, the principal point finite and the size
-/// within 1..16384. Returns kInvalidArgument naming the bad field otherwise.
+/// Checks that focal lengths are within 0.01..1e7 px, the principal point within +-1e6 px and
+/// the size within 1..16384. Returns kInvalidArgument naming the bad field otherwise.
 Status validateCamera(const PinholeCamera& camera);
 
 /// Loads a camera from a YAML or JSON file with keys fx, fy, cx, cy, width, height (a

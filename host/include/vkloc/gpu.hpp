@@ -93,10 +93,15 @@ class GpuRenderer {
   Result<RenderOutput> render(const PinholeCamera& camera, const Pose& T_world_camera,
                               const RenderSettings& settings = {});
 
-  /// Renders without reading back (the images stay on the GPU for later stages). Returns the
-  /// statistics part of RenderOutput with empty images.
+  /// Renders without reading back: the images stay in the renderer's GPU targets, where later
+  /// GPU stages of the engine read them, until the next render. Returns the statistics part of
+  /// RenderOutput with empty images.
   Result<RenderOutput> renderOnGpu(const PinholeCamera& camera, const Pose& T_world_camera,
                                    const RenderSettings& settings = {});
+
+  /// Reads the outputs of the last render (e.g. after renderOnGpu) back to the host; the same
+  /// result render() would have returned. kInvalidArgument before the first render.
+  Result<RenderOutput> readback();
 
   struct Impl;
   Impl& impl() { return *impl_; }

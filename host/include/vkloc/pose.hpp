@@ -14,9 +14,9 @@ namespace vkloc {
 using Pose = Eigen::Isometry3d;
 
 /// Builds T_world_camera for a camera at `eye` looking at `target` (world frame, metres), with
-/// image "up" as close as possible to `up_world`. Camera frame: x right, y down, z forward.
-/// Returns kInvalidArgument when eye == target, up is parallel to the view direction or any
-/// value is non-finite.
+/// image "up" as close as possible to `up_world` (any, when the view is parallel to it).
+/// Camera frame: x right, y down, z forward. Returns kInvalidArgument when eye == target, up is
+/// zero or any value is non-finite.
 Result<Pose> lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
                     const Eigen::Vector3d& up_world = Eigen::Vector3d::UnitZ());
 

@@ -50,6 +50,10 @@ struct RenderOutput {
   uint32_t triangles_drawn = 0;  ///< Triangles submitted after culling.
 };
 
+/// Checks 1e-6 <= near < far, far finite, far / near <= 1e9 (float reverse-Z precision) and
+/// lod_pixel_error finite and >= 0. kInvalidArgument naming the field otherwise.
+Status validateRenderSettings(const RenderSettings& settings);
+
 /// Column-major 4x4 clip transform for a pinhole camera in Vulkan's conventions, reverse-Z:
 /// camera z = near maps to depth 1, z = far to 0; x_ndc = 2 (u + 0.5) / width - 1 with
 /// u = fx x / z + cx (seed 001 eqs. 7-8 without the OpenGL y flip). Multiply with
