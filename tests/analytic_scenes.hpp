@@ -210,15 +210,7 @@ inline Ray pixelRay(const PinholeCamera& cam, const Pose& T_world_camera, double
 /// y down, z forward).
 inline Pose cameraLookingAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
                             const Eigen::Vector3d& up = Eigen::Vector3d::UnitZ()) {
-  const Eigen::Vector3d z = (target - eye).normalized();
-  const Eigen::Vector3d x = z.cross(up).normalized();  // Right = forward x up.
-  const Eigen::Vector3d y = z.cross(x);                // Down.
-  Pose T = Pose::Identity();
-  T.linear().col(0) = x;
-  T.linear().col(1) = y;
-  T.linear().col(2) = z;
-  T.translation() = eye;
-  return T;
+  return lookAt(eye, target, up).value();
 }
 
 /// Hit of the plane n . p = n . point, for t > 0.

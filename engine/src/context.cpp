@@ -379,6 +379,23 @@ int GpuContext::Impl::findMemoryType(uint32_t type_bits, VkMemoryPropertyFlags r
   return -1;
 }
 
+Result<engine::DeviceHandle<VkDeviceMemory>> GpuContext::Impl::allocate(const VkMemoryRequirements& req, bool mapped,
+                                                                          bool prefer_cached, const char* what) {
+  const VkMemoryPropertyFlags want =
+      mapped ? (VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
+             : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+  int type = -1;
+  if (prefer_cached) type = findMemoryType(req.memoryTypeBits, want | VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
+  if (type < 0) type = findMemoryType(req.memoryTypeBits, want);
+  if (type < 0) return makeError(ErrorCode::kGpuError, fmt::format("no suitable Vulkan memory type for {} memory", what));
+  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  mai.allocationSize = req.size;
+  mai.memoryTypeIndex = static_cast<uint32_t>(type);
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  VKLOC_VK(vkAllocateMemory(device, &mai, nullptr, &memory));
+  return engine::DeviceHandle<VkDeviceMemory>(device, memory, vkFreeMemory);
+}
+
 Result<engine::Buffer> GpuContext::Impl::createBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool host_visible) {
   engine::Buffer out;
   out.size = size;
@@ -392,19 +409,10 @@ Result<engine::Buffer> GpuContext::Impl::createBuffer(VkDeviceSize size, VkBuffe
   VkMemoryRequirements req{};
   vkGetBufferMemoryRequirements(device, buffer, &req);
   const bool mapped = host_visible || unified_memory;
-  const VkMemoryPropertyFlags want =
-      mapped ? (VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
-             : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
-  int type = -1;
-  if (host_visible) type = findMemoryType(req.memoryTypeBits, want | VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
-  if (type < 0) type = findMemoryType(req.memoryTypeBits, want);
-  if (type < 0) return makeError(ErrorCode::kGpuError, "no suitable Vulkan memory type for a buffer");
-  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  mai.allocationSize = req.size;
-  mai.memoryTypeIndex = static_cast<uint32_t>(type);
-  VkDeviceMemory memory = VK_NULL_HANDLE;
-  VKLOC_VK(vkAllocateMemory(device, &mai, nullptr, &memory));
-  out.memory = engine::DeviceHandle<VkDeviceMemory>(device, memory, vkFreeMemory);
+  auto memory_result = allocate(req, mapped, host_visible, "buffer");
+  if (!memory_result.ok()) return memory_result.error();
+  out.memory = std::move(*memory_result);
+  const VkDeviceMemory memory = out.memory.get();
   VKLOC_VK(vkBindBufferMemory(device, buffer, memory, 0));
   if (mapped) VKLOC_VK(vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &out.mapped));
   return out;
@@ -438,21 +446,10 @@ Result<engine::Image> GpuContext::Impl::createImage(uint32_t width, uint32_t hei
   out.image = engine::DeviceHandle<VkImage>(device, image, vkDestroyImage);
   VkMemoryRequirements req{};
   vkGetImageMemoryRequirements(device, image, &req);
-  int type = -1;
-  if (linear_host) {
-    const VkMemoryPropertyFlags host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    type = findMemoryType(req.memoryTypeBits, host | VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
-    if (type < 0) type = findMemoryType(req.memoryTypeBits, host);
-  } else {
-    type = findMemoryType(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-  }
-  if (type < 0) return makeError(ErrorCode::kGpuError, "no suitable Vulkan memory type for an image");
-  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  mai.allocationSize = req.size;
-  mai.memoryTypeIndex = static_cast<uint32_t>(type);
-  VkDeviceMemory memory = VK_NULL_HANDLE;
-  VKLOC_VK(vkAllocateMemory(device, &mai, nullptr, &memory));
-  out.memory = engine::DeviceHandle<VkDeviceMemory>(device, memory, vkFreeMemory);
+  auto memory_result = allocate(req, linear_host, linear_host, "image");
+  if (!memory_result.ok()) return memory_result.error();
+  out.memory = std::move(*memory_result);
+  const VkDeviceMemory memory = out.memory.get();
   VKLOC_VK(vkBindImageMemory(device, image, memory, 0));
   if (linear_host) {
     VkImageSubresource sub{aspect, 0, 0};

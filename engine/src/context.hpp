@@ -36,6 +36,11 @@ struct GpuContext::Impl {
   /// Memory type index with the required property flags among `type_bits`, or -1.
   int findMemoryType(uint32_t type_bits, VkMemoryPropertyFlags required) const;
 
+  /// Allocates memory for `req`: host-visible coherent (cached when `prefer_cached` and
+  /// available) when `mapped`, else device-local. `what` names the resource in errors.
+  Result<engine::DeviceHandle<VkDeviceMemory>> allocate(const VkMemoryRequirements& req, bool mapped,
+                                                        bool prefer_cached, const char* what);
+
   /// Creates a buffer. host_visible: mapped, coherent memory (for uploads/readback); otherwise
   /// device-local (which is also host-visible on unified memory, and then mapped too).
   Result<engine::Buffer> createBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool host_visible);
