@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs dependencies (as root), builds with -Werror and runs the whole test suite:
 # unit tests, Vulkan tests on the available device (lavapipe without a GPU) with the
-# validation layer on, command-line tests and the labelled accuracy tests.
+# validation layer on, and command-line tests (ctest labels: unit, vulkan, cli).
 # Select labels with e.g. `scripts/test.sh -L unit` (arguments go to ctest).
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -69,8 +69,10 @@ TEST(GpuNoDriver, MissingDriverIsAOneLineErrorNamingThePackage) {
   GpuOptions options;
   options.validation = 0;
   auto ctx = GpuContext::create(options);
-  if (saved) setenv("VK_ICD_FILENAMES", saved_value.c_str(), 1);
-  else unsetenv("VK_ICD_FILENAMES");
+  if (saved)
+    setenv("VK_ICD_FILENAMES", saved_value.c_str(), 1);
+  else
+    unsetenv("VK_ICD_FILENAMES");
   ASSERT_FALSE(devices.ok());
   ASSERT_FALSE(ctx.ok());
   EXPECT_EQ(ctx.error().code, ErrorCode::kNoDevice);

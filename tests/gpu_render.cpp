@@ -194,7 +194,8 @@ TEST_F(GpuRender, DemoModelsMatchReference) {
         if (rel > 1e-3) continue;
         worst = std::max(worst, rel);
         int diff = 0;
-        for (int c = 0; c < 3; ++c) diff = std::max(diff, std::abs(int(out.rgba.at(u, v, c)) - int(ref->rgba.at(u, v, c))));
+        for (int c = 0; c < 3; ++c)
+          diff = std::max(diff, std::abs(int(out.rgba.at(u, v, c)) - int(ref->rgba.at(u, v, c))));
         colour_far += diff > 8;
       }
     }
@@ -356,7 +357,8 @@ TEST_F(GpuRender, DracoEncodedModelRendersLikeItsSource) {
       ++both;
       within += std::abs(a - b) <= 4 * step + 1e-5 * a;
       int diff = 0;
-      for (int c = 0; c < 3; ++c) diff = std::max(diff, std::abs(int(expected->rgba.data[i * 4 + c]) - int(out->rgba.data[i * 4 + c])));
+      for (int c = 0; c < 3; ++c)
+        diff = std::max(diff, std::abs(int(expected->rgba.data[i * 4 + c]) - int(out->rgba.data[i * 4 + c])));
       colour_close += diff <= 12;
     }
     EXPECT_GT(both, static_cast<int>(out->depth.data.size() * 9 / 10)) << name;

@@ -3,8 +3,8 @@
 
 #include <algorithm>
 #include <array>
-#include <map>
 #include <cmath>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -161,8 +161,8 @@ int countWrongWinding(const Model& m, double cell, int free_parity, std::string*
         if (bad++ == 0 && first_bad) {
           *first_bad = "triangle " + std::to_string(t) + " centre (" + std::to_string(centre.x()) + ", " +
                        std::to_string(centre.y()) + ", " + std::to_string(centre.z()) + ") normal (" +
-                       std::to_string(n.x()) + ", " + std::to_string(n.y()) + ", " + std::to_string(n.z()) +
-                       ") side " + std::to_string(side);
+                       std::to_string(n.x()) + ", " + std::to_string(n.y()) + ", " + std::to_string(n.z()) + ") side " +
+                       std::to_string(side);
         }
         break;
       }
@@ -344,7 +344,8 @@ size_t countBuildings(const Model& m) {
       const uint32_t v = m.indices[i];
       walls.insert(v);
       parent[find(v)] = find(m.indices[i - i % 3]);  // Join the triangle's corners.
-      const std::array<long, 3> key{std::lround(m.positions[3 * v] * 100.0), std::lround(m.positions[3 * v + 1] * 100.0),
+      const std::array<long, 3> key{std::lround(m.positions[3 * v] * 100.0),
+                                    std::lround(m.positions[3 * v + 1] * 100.0),
                                     std::lround(m.positions[3 * v + 2] * 100.0)};
       const auto [it, inserted] = by_position.emplace(key, v);
       if (!inserted) parent[find(v)] = find(it->second);

@@ -6,10 +6,9 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
 #include "vkloc/demo.hpp"
@@ -27,7 +26,8 @@ Model colouredCube() {
   Model m;
   m.source = "cube";
   for (int i = 0; i < 8; ++i) {
-    m.positions.insert(m.positions.end(), {float(i & 1) * 2 - 1, float((i >> 1) & 1) * 3 - 1.5f, float(i >> 2) + 0.25f});
+    m.positions.insert(m.positions.end(),
+                       {float(i & 1) * 2 - 1, float((i >> 1) & 1) * 3 - 1.5f, float(i >> 2) + 0.25f});
     m.colors.insert(m.colors.end(), {uint8_t(30 * i), uint8_t(255 - 20 * i), uint8_t(7 * i + 3), uint8_t(100 + i)});
   }
   // Counter-clockwise seen from outside.
@@ -42,17 +42,17 @@ Model colouredCube() {
 struct Format {
   const char* name;
   const char* ext;
-  bool draco = false;        ///< Draco-compressed glTF.
-  bool quantized = false;    ///< Positions and uvs lose precision (Draco).
-  bool textures = false;     ///< Materials with textures survive.
-  bool alpha = true;         ///< Vertex colour alpha survives.
+  bool draco = false;      ///< Draco-compressed glTF.
+  bool quantized = false;  ///< Positions and uvs lose precision (Draco).
+  bool textures = false;   ///< Materials with textures survive.
+  bool alpha = true;       ///< Vertex colour alpha survives.
 };
 
 void PrintTo(const Format& f, std::ostream* os) { *os << f.name; }
 
 const Format kFormats[] = {
-    {"obj", ".obj", false, false, true, false},  {"ply", ".ply", false, false, false, true},
-    {"gltf", ".gltf", false, false, true, true}, {"glb", ".glb", false, false, true, true},
+    {"obj", ".obj", false, false, true, false},      {"ply", ".ply", false, false, false, true},
+    {"gltf", ".gltf", false, false, true, true},     {"glb", ".glb", false, false, true, true},
     {"gltf_draco", ".gltf", true, true, true, true}, {"glb_draco", ".glb", true, true, true, true},
     {"drc", ".drc", false, true, false, true},
 };
@@ -60,9 +60,9 @@ const Format kFormats[] = {
 /// Per-corner attributes as sorted value lists: invariant under vertex merging and reordering
 /// of vertices, triangles and corners.
 struct CornerStats {
-  std::vector<float> coord[5];     ///< x, y, z, u, v of every triangle corner, each sorted.
-  std::vector<uint32_t> colours;   ///< RGBA of every corner, sorted.
-  std::map<int, int> facing;       ///< Triangles whose normal is within 25 deg of +-x/y/z.
+  std::vector<float> coord[5];    ///< x, y, z, u, v of every triangle corner, each sorted.
+  std::vector<uint32_t> colours;  ///< RGBA of every corner, sorted.
+  std::map<int, int> facing;      ///< Triangles whose normal is within 25 deg of +-x/y/z.
 };
 
 CornerStats cornerStats(const Model& m, bool keep_alpha) {
@@ -112,7 +112,8 @@ double dracoStep(const Aabb& box, int bits) {
 /// Draco quantization step for texture coordinates: their largest extent over 2^bits.
 double uvStep(const Model& m, int bits) {
   float lo[2] = {1e30f, 1e30f}, hi[2] = {-1e30f, -1e30f};
-  for (size_t i = 0; i < m.uvs.size(); ++i) lo[i % 2] = std::min(lo[i % 2], m.uvs[i]), hi[i % 2] = std::max(hi[i % 2], m.uvs[i]);
+  for (size_t i = 0; i < m.uvs.size(); ++i)
+    lo[i % 2] = std::min(lo[i % 2], m.uvs[i]), hi[i % 2] = std::max(hi[i % 2], m.uvs[i]);
   return std::max(double(hi[0]) - lo[0], double(hi[1]) - lo[1]) / std::ldexp(1.0, bits);
 }
 
@@ -182,7 +183,9 @@ TEST_P(ModelRoundTrip, ColouredCube) {
 }
 
 INSTANTIATE_TEST_SUITE_P(, ModelRoundTrip, ::testing::ValuesIn(kFormats),
-                         [](const ::testing::TestParamInfo<Format>& param_info) { return std::string(param_info.param.name); });
+                         [](const ::testing::TestParamInfo<Format>& param_info) {
+                           return std::string(param_info.param.name);
+                         });
 
 /// The JSON chunk of a GLB file.
 json glbJson(const std::vector<uint8_t>& glb) {
@@ -228,15 +231,16 @@ TEST(ModelRoundTripFiles, GltfFollowsTheSpecLayout) {
       EXPECT_EQ(mat["baseColorFactor"].size(), 4u);
       EXPECT_TRUE(mat.contains("baseColorTexture"));
     }
-    const bool required = j.contains("extensionsRequired") &&
-                          j["extensionsRequired"] == json::array({"KHR_draco_mesh_compression"});
+    const bool required =
+        j.contains("extensionsRequired") && j["extensionsRequired"] == json::array({"KHR_draco_mesh_compression"});
     EXPECT_EQ(required, draco);
     EXPECT_EQ(j.contains("extensionsUsed"), draco);
   }
   // A .gltf comes with its .bin and one PNG per texture, named after the file.
   ASSERT_TRUE(saveModel(room, dir.file("room.gltf")).ok());
   EXPECT_TRUE(fs::exists(dir.file("room.bin")));
-  for (size_t i = 0; i < room.textures.size(); ++i) EXPECT_TRUE(fs::exists(dir.file("room_tex" + std::to_string(i) + ".png")));
+  for (size_t i = 0; i < room.textures.size(); ++i)
+    EXPECT_TRUE(fs::exists(dir.file("room_tex" + std::to_string(i) + ".png")));
   // Draco is much smaller.
   EXPECT_LT(fs::file_size(dir.file("room_draco.glb")), fs::file_size(dir.file("room.glb")));
 }

@@ -1,10 +1,10 @@
 #include "test_support.hpp"
 
+#include <unistd.h>
+
 #include <atomic>
 #include <fstream>
 #include <random>
-
-#include <unistd.h>
 
 namespace vkloc::test {
 

@@ -1,10 +1,10 @@
 // vkloc bench render: timing of model renders at 640x480 for ~10k, 100k and 1M triangles.
-#include <algorithm>
-#include <cstring>
-#include <cstdio>
-#include <sstream>
-
 #include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <sstream>
 
 #include "common.hpp"
 #include "vkloc/demo.hpp"
@@ -63,11 +63,12 @@ Stats stats(std::vector<double> v) {
 void run(const BenchArgs& a) {
   const PinholeCamera camera = a.camera.get();
   auto context = a.device.create();
-  std::printf("device: %s (%s); %dx%d, %d runs after %d warm-up, median [p10 p90] ms\n",
-              context->device().name.c_str(), context->device().type.c_str(), camera.width, camera.height, a.runs,
-              a.warmup);
-  std::printf("columns: exact = full detail; lod = level of detail at %.2f px error; c+d+n = colour, depth and "
-              "normals read back; gpu = left on the GPU\n", a.lod_pixel_error);
+  std::printf("device: %s (%s); %dx%d, %d runs after %d warm-up, median [p10 p90] ms\n", context->device().name.c_str(),
+              context->device().type.c_str(), camera.width, camera.height, a.runs, a.warmup);
+  std::printf(
+      "columns: exact = full detail; lod = level of detail at %.2f px error; c+d+n = colour, depth and "
+      "normals read back; gpu = left on the GPU\n",
+      a.lod_pixel_error);
   std::printf("%-10s %-8s %9s %8s %-22s %-22s %-22s %8s %-22s %-22s %s\n", "model", "view", "triangles", "drawn",
               "exact c+d+n", "exact c+d", "exact gpu", "lod drawn", "lod c+d+n", "lod gpu", "CPU reference c+d+n");
   for (uint32_t target : a.triangles) {
@@ -93,7 +94,8 @@ void run(const BenchArgs& a) {
         std::vector<double> ms;
         for (int i = 0; i < a.warmup + a.runs; ++i) {
           const auto t1 = std::chrono::steady_clock::now();
-          RenderOutput out = readback ? take(renderer->render(camera, pose, s)) : take(renderer->renderOnGpu(camera, pose, s));
+          RenderOutput out =
+              readback ? take(renderer->render(camera, pose, s)) : take(renderer->renderOnGpu(camera, pose, s));
           if (i >= a.warmup) ms.push_back(msSince(t1));
           *drawn = out.triangles_drawn;
         }
@@ -145,8 +147,9 @@ void addBenchVerb(CLI::App& app) {
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
   render->add_flag("!--no-cull", args->cull, "Disable back-face culling");
-  render->add_option("--roughness", args->roughness_m,
-                     "Random vertex displacement of the enlarged models, metres (photogrammetry-like)")
+  render
+      ->add_option("--roughness", args->roughness_m,
+                   "Random vertex displacement of the enlarged models, metres (photogrammetry-like)")
       ->capture_default_str();
   render->add_option("--lod-pixel-error", args->lod_pixel_error, "Level-of-detail error bound, pixels")
       ->capture_default_str();

@@ -1,9 +1,9 @@
 // vkloc demo: the main job on built-in data (for now: render the demo models at their demo
 // viewpoints and report where the images are and how long each render took).
+#include <fmt/format.h>
+
 #include <cstdio>
 #include <filesystem>
-
-#include <fmt/format.h>
 
 #include "common.hpp"
 #include "vkloc/demo.hpp"
@@ -45,9 +45,10 @@ void run(const DemoArgs& a) {
       const auto paths = writeRender(dir, fmt::format("view{:02d}", i), out);
       size_t seen = 0;
       for (float z : out.depth.data) seen += z > 0.0f;
-      std::printf("  view %zu: %6.2f ms (first %6.1f ms), %3u/%zu blocks, %6u triangles, %4.1f%% pixels covered -> %s\n",
-                  i, ms, first_ms, out.blocks_drawn, model.blocks.size(), out.triangles_drawn,
-                  100.0 * static_cast<double>(seen) / out.depth.data.size(), paths[0].c_str());
+      std::printf(
+          "  view %zu: %6.2f ms (first %6.1f ms), %3u/%zu blocks, %6u triangles, %4.1f%% pixels covered -> %s\n", i, ms,
+          first_ms, out.blocks_drawn, model.blocks.size(), out.triangles_drawn,
+          100.0 * static_cast<double>(seen) / out.depth.data.size(), paths[0].c_str());
     }
   }
   std::printf("\nimages written under %s/ (rgba, gray, depth_mm 16-bit PNG, depth float TIFF, normals)\n",

@@ -14,9 +14,8 @@ void addDevicesVerb(CLI::App& app) {
     auto chosen = GpuContext::create(options);
     for (const auto& d : devices) {
       const bool is_default = chosen.ok() && (*chosen)->device().index == d.index;
-      std::printf("%c %d: %s [%s, Vulkan %s] %s%s%s\n", is_default ? '*' : ' ', d.index, d.name.c_str(),
-                  d.type.c_str(), d.api_version.c_str(), d.driver.c_str(), d.usable ? "" : " -- unusable: ",
-                  d.why_unusable.c_str());
+      std::printf("%c %d: %s [%s, Vulkan %s] %s%s%s\n", is_default ? '*' : ' ', d.index, d.name.c_str(), d.type.c_str(),
+                  d.api_version.c_str(), d.driver.c_str(), d.usable ? "" : " -- unusable: ", d.why_unusable.c_str());
     }
     if (!chosen.ok()) throw Failure{chosen.error().message};
   });

@@ -21,7 +21,8 @@ void addInfoVerb(CLI::App& app) {
                 m.uvs.empty() ? "no" : "yes", m.colors.empty() ? "no" : "yes");
     std::printf("bounds:     [%.3f %.3f %.3f] .. [%.3f %.3f %.3f] m (size %.3f x %.3f x %.3f)\n", m.bounds.min[0],
                 m.bounds.min[1], m.bounds.min[2], m.bounds.max[0], m.bounds.max[1], m.bounds.max[2],
-                m.bounds.max[0] - m.bounds.min[0], m.bounds.max[1] - m.bounds.min[1], m.bounds.max[2] - m.bounds.min[2]);
+                m.bounds.max[0] - m.bounds.min[0], m.bounds.max[1] - m.bounds.min[1],
+                m.bounds.max[2] - m.bounds.min[2]);
     std::printf("materials:  %zu\n", m.materials.size());
     for (size_t i = 0; i < m.materials.size(); ++i) {
       const Material& mat = m.materials[i];

@@ -1,8 +1,8 @@
 // vkloc render: render a model at one or more poses and write colour, depth and normals.
+#include <fmt/format.h>
+
 #include <cstdio>
 #include <sstream>
-
-#include <fmt/format.h>
 
 #include "common.hpp"
 #include "vkloc/demo.hpp"

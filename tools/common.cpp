@@ -1,11 +1,11 @@
 #include "common.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
-
-#include <fmt/format.h>
 
 #include "vkloc/demo.hpp"
 #include "vkloc/image.hpp"
@@ -18,8 +18,7 @@ void ModelArgs::add(CLI::App& app) {
   app.add_option("--model,-m", model, "Model file (.obj .ply .gltf .glb .drc ...) or built-in: city, room")
       ->capture_default_str();
   app.add_option("--unit-scale", unit_scale, "Metres per model unit")->capture_default_str();
-  app.add_option("--model-pose", T_world_model,
-                 "T_world_model: 'tx ty tz qx qy qz qw' or 16 numbers (row-major 4x4)");
+  app.add_option("--model-pose", T_world_model, "T_world_model: 'tx ty tz qx qy qz qw' or 16 numbers (row-major 4x4)");
   app.add_option("--block-triangles", block_triangles, "Target triangles per spatial block (0 = one block)")
       ->capture_default_str();
 }
@@ -47,7 +46,8 @@ Model ModelArgs::load() const {
 
 void CameraArgs::add(CLI::App& app) {
   app.add_option("--camera,-c", file, "Camera file (YAML/JSON with fx fy cx cy width height)");
-  app.add_option("--intrinsics", intrinsics, "Inline camera 'fx,fy,cx,cy,width,height' (default 525,525,319.5,239.5,640,480)");
+  app.add_option("--intrinsics", intrinsics,
+                 "Inline camera 'fx,fy,cx,cy,width,height' (default 525,525,319.5,239.5,640,480)");
 }
 
 PinholeCamera CameraArgs::get() const {

@@ -1,12 +1,11 @@
 // Shared pieces of the vkloc command-line verbs.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "vkloc/camera.hpp"
 #include "vkloc/gpu.hpp"
@@ -32,9 +31,9 @@ inline void check(const Status& s) {
 
 /// Model options shared by verbs that load a model.
 struct ModelArgs {
-  std::string model = "city";   ///< File path, or a built-in name: city, room.
+  std::string model = "city";  ///< File path, or a built-in name: city, room.
   double unit_scale = 1.0;
-  std::string T_world_model;    ///< "" or 7/16 numbers.
+  std::string T_world_model;  ///< "" or 7/16 numbers.
   uint32_t block_triangles = 32768;
   void add(CLI::App& app);
   /// Loads the model (or builds the demo); prints warnings to stderr.

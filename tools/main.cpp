@@ -1,6 +1,5 @@
 // vkloc: command-line entry point. One verb per file in tools/.
 #include <cstdio>
-
 #include <opencv2/core/utils/logger.hpp>
 
 #include "common.hpp"

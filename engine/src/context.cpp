@@ -1,6 +1,7 @@
 // Vulkan instance/device creation, device selection, validation and memory helpers.
 #include "context.hpp"
 
+#include <fmt/format.h>
 #include <malloc.h>
 
 #include <algorithm>
@@ -9,8 +10,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
-
-#include <fmt/format.h>
 
 namespace vkloc {
 namespace {
@@ -27,21 +26,31 @@ std::string lower(std::string s) {
 
 const char* deviceTypeName(VkPhysicalDeviceType t) {
   switch (t) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete";
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated";
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual";
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "cpu";
-    default: return "other";
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+      return "discrete";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+      return "integrated";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+      return "virtual";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+      return "cpu";
+    default:
+      return "other";
   }
 }
 
 int deviceTypeScore(VkPhysicalDeviceType t) {
   switch (t) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 4;
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 3;
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 1;
-    default: return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+      return 4;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+      return 3;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+      return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+      return 1;
+    default:
+      return 0;
   }
 }
 
@@ -51,13 +60,12 @@ std::string versionString(uint32_t v) {
 
 VKAPI_ATTR VkBool32 VKAPI_CALL debugCallback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                              VkDebugUtilsMessageTypeFlagsEXT types,
-                                             const VkDebugUtilsMessengerCallbackDataEXT* data,
-                                             void* user) {
+                                             const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
   auto* impl = static_cast<GpuContext::Impl*>(user);
-  const bool counts = (severity & (VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
-                                   VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT)) != 0 &&
-                      (types & (VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
-                                VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT)) != 0;
+  const bool counts =
+      (severity & (VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT)) !=
+          0 &&
+      (types & (VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT)) != 0;
   if (counts) {
     impl->validation_messages.fetch_add(1);
     if (impl->print_validation) {
@@ -145,7 +153,8 @@ Result<VkInstance> createInstance(bool validation, GpuContext::Impl* impl, VkDeb
     ci.enabledExtensionCount = 1;
     ci.ppEnabledExtensionNames = extensions;
     dbg->sType = VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT;
-    dbg->messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    dbg->messageSeverity =
+        VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
     dbg->messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
                        VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
     dbg->pfnUserCallback = debugCallback;
@@ -180,6 +189,7 @@ namespace engine {
 
 const char* vkResultName(VkResult r) {
   switch (r) {
+    // clang-format off
 #define VKLOC_CASE(x) case x: return #x;
     VKLOC_CASE(VK_SUCCESS) VKLOC_CASE(VK_NOT_READY) VKLOC_CASE(VK_TIMEOUT) VKLOC_CASE(VK_INCOMPLETE)
     VKLOC_CASE(VK_ERROR_OUT_OF_HOST_MEMORY) VKLOC_CASE(VK_ERROR_OUT_OF_DEVICE_MEMORY)
@@ -190,7 +200,8 @@ const char* vkResultName(VkResult r) {
     VKLOC_CASE(VK_ERROR_FORMAT_NOT_SUPPORTED) VKLOC_CASE(VK_ERROR_FRAGMENTED_POOL)
     VKLOC_CASE(VK_ERROR_OUT_OF_POOL_MEMORY)
 #undef VKLOC_CASE
-    default: return "VK_ERROR_UNKNOWN";
+        // clang-format on
+        default : return "VK_ERROR_UNKNOWN";
   }
 }
 
@@ -249,8 +260,9 @@ Result<std::shared_ptr<GpuContext>> GpuContext::create(const GpuOptions& options
   }
   if (validation && !layerAvailable(kValidationLayer)) {
     if (validation_required) {
-      return makeError(ErrorCode::kNoDevice,
-                       "Vulkan validation requested but the layer is not installed: apt-get install vulkan-validationlayers");
+      return makeError(
+          ErrorCode::kNoDevice,
+          "Vulkan validation requested but the layer is not installed: apt-get install vulkan-validationlayers");
     }
     std::fprintf(stderr, "vkloc: warning: Vulkan validation layer not installed; running without it\n");
     validation = false;
@@ -281,20 +293,19 @@ Result<std::shared_ptr<GpuContext>> GpuContext::create(const GpuOptions& options
   if (!want.empty()) {
     const bool numeric = std::all_of(want.begin(), want.end(), [](unsigned char c) { return std::isdigit(c); });
     for (const auto& info : infos) {
-      const bool match = numeric ? std::to_string(info.index) == want
-                                 : lower(info.name).find(lower(want)) != std::string::npos;
+      const bool match =
+          numeric ? std::to_string(info.index) == want : lower(info.name).find(lower(want)) != std::string::npos;
       if (match) {
         chosen = info.index;
         break;
       }
     }
     if (chosen < 0) {
-      return makeError(ErrorCode::kNotFound,
-                       fmt::format("no Vulkan device matches '{}' (see 'vkloc devices')", want));
+      return makeError(ErrorCode::kNotFound, fmt::format("no Vulkan device matches '{}' (see 'vkloc devices')", want));
     }
     if (!infos[chosen].usable) {
-      return makeError(ErrorCode::kNoDevice, fmt::format("Vulkan device '{}' is not usable: {}",
-                                                         infos[chosen].name, infos[chosen].why_unusable));
+      return makeError(ErrorCode::kNoDevice, fmt::format("Vulkan device '{}' is not usable: {}", infos[chosen].name,
+                                                         infos[chosen].why_unusable));
     }
   } else {
     int best_score = -1;
@@ -380,14 +391,15 @@ int GpuContext::Impl::findMemoryType(uint32_t type_bits, VkMemoryPropertyFlags r
 }
 
 Result<engine::DeviceHandle<VkDeviceMemory>> GpuContext::Impl::allocate(const VkMemoryRequirements& req, bool mapped,
-                                                                          bool prefer_cached, const char* what) {
-  const VkMemoryPropertyFlags want =
-      mapped ? (VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
-             : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+                                                                        bool prefer_cached, const char* what) {
+  const VkMemoryPropertyFlags want = mapped
+                                         ? (VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
+                                         : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
   int type = -1;
   if (prefer_cached) type = findMemoryType(req.memoryTypeBits, want | VK_MEMORY_PROPERTY_HOST_CACHED_BIT);
   if (type < 0) type = findMemoryType(req.memoryTypeBits, want);
-  if (type < 0) return makeError(ErrorCode::kGpuError, fmt::format("no suitable Vulkan memory type for {} memory", what));
+  if (type < 0)
+    return makeError(ErrorCode::kGpuError, fmt::format("no suitable Vulkan memory type for {} memory", what));
   VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   mai.allocationSize = req.size;
   mai.memoryTypeIndex = static_cast<uint32_t>(type);
@@ -534,7 +546,8 @@ Status GpuContext::Impl::uploadImage(engine::Image& dst, const void* rgba, VkDev
     VkBufferImageCopy region{};
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     region.imageExtent = {dst.width, dst.height, 1};
-    vkCmdCopyBufferToImage(cmd, staging->buffer.get(), dst.image.get(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+    vkCmdCopyBufferToImage(cmd, staging->buffer.get(), dst.image.get(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1,
+                           &region);
     b.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
     b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
     b.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;

@@ -48,9 +48,8 @@ struct GpuContext::Impl {
   /// Creates a 2D image with one mip level and a view of it: optimal tiling in device-local
   /// memory, or (linear_host) linear tiling in host-visible memory, mapped, so the host reads
   /// it without a copy.
-  Result<engine::Image> createImage(uint32_t width, uint32_t height, VkFormat format,
-                                    VkImageUsageFlags usage, VkImageAspectFlags aspect,
-                                    bool linear_host = false);
+  Result<engine::Image> createImage(uint32_t width, uint32_t height, VkFormat format, VkImageUsageFlags usage,
+                                    VkImageAspectFlags aspect, bool linear_host = false);
 
   /// True when `format` supports `features` with linear tiling.
   bool linearSupports(VkFormat format, VkFormatFeatureFlags features) const;

@@ -1,10 +1,10 @@
 #include "lod.hpp"
 
+#include <meshoptimizer.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
-#include <meshoptimizer.h>
 
 namespace vkloc::engine {
 namespace {
@@ -30,7 +30,8 @@ double simplifyRange(const uint32_t* idx, size_t count, const Model& model, size
     if (slot == UINT32_MAX) {
       slot = static_cast<uint32_t>(c.local_to_global.size());
       c.local_to_global.push_back(idx[i]);
-      c.positions.insert(c.positions.end(), &model.positions[3 * size_t(idx[i])], &model.positions[3 * size_t(idx[i])] + 3);
+      c.positions.insert(c.positions.end(), &model.positions[3 * size_t(idx[i])],
+                         &model.positions[3 * size_t(idx[i])] + 3);
     }
     c.local_indices[i] = slot;
   }
@@ -53,8 +54,8 @@ LodModel buildLodModel(const Model& model, int max_levels) {
   const size_t nv = model.vertexCount();
   lod.indices.resize(model.indices.size());
   for (const DrawRange& r : model.ranges) {
-    meshopt_optimizeVertexCache(lod.indices.data() + r.first_index, model.indices.data() + r.first_index,
-                                r.index_count, nv);
+    meshopt_optimizeVertexCache(lod.indices.data() + r.first_index, model.indices.data() + r.first_index, r.index_count,
+                                nv);
   }
   Compactor c;
   c.global_to_local.assign(nv, UINT32_MAX);

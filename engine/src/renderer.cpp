@@ -1,12 +1,12 @@
 // GpuRenderer: model rendering to colour, linear metric depth and normals with Vulkan.
+#include <fmt/format.h>
+#include <meshoptimizer.h>
+
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <map>
-
-#include <fmt/format.h>
-#include <meshoptimizer.h>
 
 #include "context.hpp"
 #include "lod.hpp"
@@ -28,8 +28,8 @@ namespace {
 
 constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kLinearDepthFormat = VK_FORMAT_R32_SFLOAT;
-constexpr VkFormat kNormalFormat = VK_FORMAT_R32_UINT;  // octahedral, packSnorm2x16
-constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;      // reverse-Z
+constexpr VkFormat kNormalFormat = VK_FORMAT_R32_UINT;   // octahedral, packSnorm2x16
+constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;  // reverse-Z
 
 // Interleaved per-vertex attributes of binding 1 (binding 0 holds positions alone, so
 // depth-only passes can skip these).
@@ -68,7 +68,7 @@ struct Targets {
   uint32_t width = 0, height = 0;
   engine::Image color, linear_depth, normals, depth;
   DeviceHandle<VkFramebuffer> framebuffer[2];  // [with normals]
-  Buffer readback;  // rgba8 | float depth | rg16f normals (copy path only)
+  Buffer readback;                             // rgba8 | float depth | rg16f normals (copy path only)
 };
 
 // Copies `height` rows of `row_bytes` from a pitched source into a packed destination.
@@ -122,8 +122,8 @@ struct GpuRenderer::Impl {
   Status createRenderPasses();
   Result<VkPipeline> pipeline(bool normals, bool cull);
   Status ensureTargets(uint32_t width, uint32_t height);
-  Result<RenderOutput> render(const PinholeCamera& camera, const Pose& T_world_camera,
-                              const RenderSettings& settings, bool readback);
+  Result<RenderOutput> render(const PinholeCamera& camera, const Pose& T_world_camera, const RenderSettings& settings,
+                              bool readback);
   /// Records the commands that make the targets readable by the host (barrier or copies).
   void recordReadback(bool normals);
   /// Reads the targets of the last render into host images.
@@ -194,8 +194,9 @@ Status GpuRenderer::Impl::init(const Model& model, const GpuRendererOptions& opt
                                  texture_count, ctx->properties.limits.maxPerStageDescriptorSamplers));
   }
   for (const Texture& t : host_textures) {
-    auto img = ctx->createImage(static_cast<uint32_t>(t.width), static_cast<uint32_t>(t.height), kColorFormat,
-                                VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+    auto img =
+        ctx->createImage(static_cast<uint32_t>(t.width), static_cast<uint32_t>(t.height), kColorFormat,
+                         VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
     if (!img.ok()) return img.error();
     VKLOC_TRY_STATUS(ctx->uploadImage(*img, t.rgba.data(), t.rgba.size()));
     textures.push_back(std::move(*img));
@@ -367,9 +368,8 @@ Result<VkPipeline> GpuRenderer::Impl::pipeline(bool normals, bool cull) {
 
   const VkVertexInputBindingDescription bindings[2] = {{0, 12, VK_VERTEX_INPUT_RATE_VERTEX},
                                                        {1, sizeof(VertexAttributes), VK_VERTEX_INPUT_RATE_VERTEX}};
-  const VkVertexInputAttributeDescription attrs[3] = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0},
-                                                      {1, 1, VK_FORMAT_R32G32_SFLOAT, 0},
-                                                      {2, 1, VK_FORMAT_R8G8B8A8_UNORM, 8}};
+  const VkVertexInputAttributeDescription attrs[3] = {
+      {0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}, {1, 1, VK_FORMAT_R32G32_SFLOAT, 0}, {2, 1, VK_FORMAT_R8G8B8A8_UNORM, 8}};
   VkPipelineVertexInputStateCreateInfo vin{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
   vin.vertexBindingDescriptionCount = 2;
   vin.pVertexBindingDescriptions = bindings;
@@ -438,7 +438,8 @@ Status GpuRenderer::Impl::ensureTargets(uint32_t width, uint32_t height) {
   VKLOC_TRY_STATUS(mk(targets.linear_depth, kLinearDepthFormat, color_usage, VK_IMAGE_ASPECT_COLOR_BIT));
   VKLOC_TRY_STATUS(mk(targets.normals, kNormalFormat, color_usage, VK_IMAGE_ASPECT_COLOR_BIT));
   linear = false;  // the depth buffer is never read by the host
-  VKLOC_TRY_STATUS(mk(targets.depth, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT));
+  VKLOC_TRY_STATUS(
+      mk(targets.depth, kDepthFormat, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT));
   for (int with_normals = 0; with_normals < 2; ++with_normals) {
     std::vector<VkImageView> views = {targets.color.view.get(), targets.linear_depth.view.get()};
     if (with_normals) views.push_back(targets.normals.view.get());
@@ -490,11 +491,10 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
   const double pixels_per_metre = engine::lodPixelsPerMetre(camera);
   for (const engine::LodBlock& b : lod.blocks) {
     if (!aabbInFrustum(b.bounds, camera, T_world_camera, settings.near_m, settings.far_m)) continue;
-    const int level_index =
-        settings.lod_pixel_error > 0
-            ? engine::selectLodLevel(b, engine::minDepthOfBox(b.bounds, T_camera_world), pixels_per_metre,
-                                     settings.lod_pixel_error)
-            : 0;
+    const int level_index = settings.lod_pixel_error > 0
+                                ? engine::selectLodLevel(b, engine::minDepthOfBox(b.bounds, T_camera_world),
+                                                         pixels_per_metre, settings.lod_pixel_error)
+                                : 0;
     const engine::LodLevel& level = b.levels[static_cast<size_t>(level_index)];
     ++out.blocks_drawn;
     out.triangles_drawn += level.triangles;
@@ -512,8 +512,8 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
   // clip_from_origin = P * T_camera_world * T_world_origin, composed in double.
   Eigen::Matrix4d T_world_origin = Eigen::Matrix4d::Identity();
   T_world_origin.block<3, 1>(0, 3) = Eigen::Vector3d(origin[0], origin[1], origin[2]);
-  const Eigen::Matrix4d clip = projectionMatrix(camera, settings.near_m, settings.far_m) *
-                               T_world_camera.inverse().matrix() * T_world_origin;
+  const Eigen::Matrix4d clip =
+      projectionMatrix(camera, settings.near_m, settings.far_m) * T_world_camera.inverse().matrix() * T_world_origin;
   engine::ModelPush push{};
   for (int c = 0; c < 4; ++c) {
     for (int r = 0; r < 4; ++r) push.clip_from_origin[c * 4 + r] = static_cast<float>(clip(r, c));

@@ -8,7 +8,7 @@
 namespace vkloc::engine {
 
 struct ShaderBlob {
-  const char* name;     ///< Source file name, e.g. "model.vert".
+  const char* name;  ///< Source file name, e.g. "model.vert".
   const uint32_t* words;
   size_t word_count;
 };

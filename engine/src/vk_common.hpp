@@ -1,9 +1,9 @@
 // Vulkan helpers private to the engine: error conversion and RAII handles.
 #pragma once
 
-#include <utility>
-
 #include <vulkan/vulkan.h>
+
+#include <utility>
 
 #include "vkloc/status.hpp"
 
@@ -16,9 +16,9 @@ const char* vkResultName(VkResult result);
 Error vkError(const char* call, VkResult result);
 
 /// Evaluates a Vulkan call; returns its Error from the enclosing function when it fails.
-#define VKLOC_VK(call)                                                     \
-  do {                                                                     \
-    VkResult vkloc_vk_result_ = (call);                                    \
+#define VKLOC_VK(call)                                                                            \
+  do {                                                                                            \
+    VkResult vkloc_vk_result_ = (call);                                                           \
     if (vkloc_vk_result_ != VK_SUCCESS) return ::vkloc::engine::vkError(#call, vkloc_vk_result_); \
   } while (0)
 
@@ -28,8 +28,7 @@ class DeviceHandle {
  public:
   using DestroyFn = void (*)(VkDevice, T, const VkAllocationCallbacks*);
   DeviceHandle() = default;
-  DeviceHandle(VkDevice device, T handle, DestroyFn destroy)
-      : device_(device), handle_(handle), destroy_(destroy) {}
+  DeviceHandle(VkDevice device, T handle, DestroyFn destroy) : device_(device), handle_(handle), destroy_(destroy) {}
   ~DeviceHandle() { reset(); }
   DeviceHandle(DeviceHandle&& o) noexcept { *this = std::move(o); }
   DeviceHandle& operator=(DeviceHandle&& o) noexcept {

@@ -1,11 +1,11 @@
 #include "vkloc/camera.hpp"
 
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-
-#include <fmt/format.h>
-#include <yaml-cpp/yaml.h>
 
 namespace vkloc {
 

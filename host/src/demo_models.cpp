@@ -9,17 +9,16 @@
 // buildings stand on ground that is cut out under their footprint. Quads whose edges are
 // axis-aligned are split on a world-aligned grid when a triangle target is set, so that
 // neighbouring faces get the same split points and stay watertight.
-#include "vkloc/demo.hpp"
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <functional>
 #include <limits>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "vkloc/demo.hpp"
 
 namespace vkloc {
 namespace {
@@ -70,9 +69,7 @@ class Rng {
 struct Rgb {
   double r = 0, g = 0, b = 0;
   Rgb scaled(double f) const { return {r * f, g * f, b * f}; }
-  Rgb mix(const Rgb& o, double t) const {
-    return {r + (o.r - r) * t, g + (o.g - g) * t, b + (o.b - b) * t};
-  }
+  Rgb mix(const Rgb& o, double t) const { return {r + (o.r - r) * t, g + (o.g - g) * t, b + (o.b - b) * t}; }
   cv::Scalar scalar() const {
     auto c = [](double v) { return std::clamp(v, 0.0, 255.0); };
     return cv::Scalar(c(r), c(g), c(b), 255);  // Channel order R, G, B, A as stored.
@@ -124,8 +121,8 @@ class Canvas {
     const int th = std::max(1, px(t));
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
-        cv::line(img_, cv::Point(px(x0 + dx), px(y0 + dy)), cv::Point(px(x1 + dx), px(y1 + dy)),
-                 c.scalar(), th, cv::LINE_AA);
+        cv::line(img_, cv::Point(px(x0 + dx), px(y0 + dy)), cv::Point(px(x1 + dx), px(y1 + dy)), c.scalar(), th,
+                 cv::LINE_AA);
       }
     }
   }
@@ -134,14 +131,13 @@ class Canvas {
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
         if (cx + dx + r < 0 || cx + dx - r > 1 || cy + dy + r < 0 || cy + dy - r > 1) continue;
-        cv::circle(img_, cv::Point(px(cx + dx), px(cy + dy)), std::max(1, px(r)), c.scalar(), th,
-                   cv::LINE_AA);
+        cv::circle(img_, cv::Point(px(cx + dx), px(cy + dy)), std::max(1, px(r)), c.scalar(), th, cv::LINE_AA);
       }
     }
   }
   void ellipse(double cx, double cy, double rx, double ry, Rgb c) {
-    cv::ellipse(img_, cv::Point(px(cx), px(cy)), cv::Size(std::max(1, px(rx)), std::max(1, px(ry))),
-                0, 0, 360, c.scalar(), cv::FILLED, cv::LINE_AA);
+    cv::ellipse(img_, cv::Point(px(cx), px(cy)), cv::Size(std::max(1, px(rx)), std::max(1, px(ry))), 0, 0, 360,
+                c.scalar(), cv::FILLED, cv::LINE_AA);
   }
   void poly(const std::vector<std::array<double, 2>>& pts, Rgb c) {
     std::vector<cv::Point> p;
@@ -168,8 +164,7 @@ class Canvas {
     const uint32_t seed = hash4(seed_, salt, 0x4E01u);
     std::vector<float> lattice(static_cast<size_t>(cells_x) * cells_y);
     for (int j = 0; j < cells_y; ++j)
-      for (int i = 0; i < cells_x; ++i)
-        lattice[j * cells_x + i] = static_cast<float>(hashUnit(seed, i, j) * 2.0 - 1.0);
+      for (int i = 0; i < cells_x; ++i) lattice[j * cells_x + i] = static_cast<float>(hashUnit(seed, i, j) * 2.0 - 1.0);
     // Per-column lattice cells and smoothstep weights, computed once.
     std::vector<int> col0(s_), col1(s_);
     std::vector<float> colt(s_);
@@ -219,8 +214,8 @@ class Canvas {
 // ---- shared texture pieces ---------------------------------------------------------------------
 
 /// A window: frame, glass with a vertical gradient, optional blind, mullion and transom.
-void drawWindow(Canvas& c, Rng& rng, double x0, double y0, double x1, double y1, Rgb frame,
-                Rgb glass, bool mullion, bool transom, double frame_t) {
+void drawWindow(Canvas& c, Rng& rng, double x0, double y0, double x1, double y1, Rgb frame, Rgb glass, bool mullion,
+                bool transom, double frame_t) {
   c.rect(x0, y0, x1, y1, frame);
   const double ix0 = x0 + frame_t, iy0 = y0 + frame_t, ix1 = x1 - frame_t, iy1 = y1 - frame_t;
   const double tone = rng.uniform(0.75, 1.25);
@@ -264,8 +259,8 @@ Texture roadTexture(int size, uint32_t seed, bool crossing) {
   Canvas c(size, Rgb{78, 78, 82}, seed);
   Rng rng(seed);
   drawAsphalt(c, rng, 3);
-  const double m = 1.0 / 12.0;  // One metre.
-  c.rect(0, 0, 0.3 * m, 1, Rgb{60, 60, 62});      // Gutters.
+  const double m = 1.0 / 12.0;                // One metre.
+  c.rect(0, 0, 0.3 * m, 1, Rgb{60, 60, 62});  // Gutters.
   c.rect(1 - 0.3 * m, 0, 1, 1, Rgb{60, 60, 62});
   c.rect(0.5 * m, 0, 0.65 * m, 1, kMarkingWhite);  // Edge lines.
   c.rect(1 - 0.65 * m, 0, 1 - 0.5 * m, 1, kMarkingWhite);
@@ -275,7 +270,7 @@ Texture roadTexture(int size, uint32_t seed, bool crossing) {
     // Zebra crossing 0.5 .. 3.5 m from the junction end (v = 0), bars 0.5 m wide.
     for (double u = 1.0 * m; u + 0.5 * m <= 11.0 * m + 1e-9; u += 1.0 * m)
       c.rect(u, 0.5 * m, u + 0.5 * m, 3.5 * m, kMarkingWhite);
-    c.rect(0.5, 4.5 * m, 1 - 0.65 * m, 4.9 * m, kMarkingWhite);  // Stop line, approaching lane.
+    c.rect(0.5, 4.5 * m, 1 - 0.65 * m, 4.9 * m, kMarkingWhite);                 // Stop line, approaching lane.
     c.rect(0.5 - 0.075 * m, 4.5 * m, 0.5 + 0.075 * m, 8.0 * m, kMarkingWhite);  // Solid centre.
     c.rect(0.5 - 0.075 * m, 9.0 * m, 0.5 + 0.075 * m, 12.0 * m, kMarkingWhite);
     // Arrow on the approaching lane.
@@ -503,7 +498,7 @@ const std::array<FacadeStyle, 8> kFacadeStyles{{
 Texture facadeTexture(int size, uint32_t seed, const FacadeStyle& st) {
   Canvas c(size, st.wall, seed);
   Rng rng(seed);
-  const double ft = 0.012;  // Window frame thickness.
+  const double ft = 0.012;                                                // Window frame thickness.
   auto floorY = [](int f, double h) { return (f + 1) * 0.5 - h * 0.5; };  // h: fraction of floor.
   switch (st.kind) {
     case FacadeKind::kBrick: {
@@ -551,8 +546,8 @@ Texture facadeTexture(int size, uint32_t seed, const FacadeStyle& st) {
         const double x = i / 8.0;
         c.rect(x - ft / 2, floorY(f, 0.85), x + ft / 2, floorY(f, 0.3), st.frame);
         if (rng.chance(0.4))
-          c.rect(x + ft / 2, floorY(f, 0.85), x + 1.0 / 8 - ft / 2,
-                 floorY(f, 0.85) + rng.uniform(0.05, 0.2), Rgb{210, 205, 190});
+          c.rect(x + ft / 2, floorY(f, 0.85), x + 1.0 / 8 - ft / 2, floorY(f, 0.85) + rng.uniform(0.05, 0.2),
+                 Rgb{210, 205, 190});
       }
       c.rect(0, floorY(f, 0.85) - ft, 1, floorY(f, 0.85), st.frame);
       c.rect(0, floorY(f, 0.3), 1, floorY(f, 0.3) + ft, st.frame);
@@ -628,8 +623,7 @@ Texture groundFloorTexture(int size, uint32_t seed, const GroundStyle& st) {
     switch (st.kind) {
       case GroundKind::kShop: {
         c.rect(x0, 0.0, x1, 0.16, st.accent.scaled(b % 2 ? 0.8 : 1.0));  // Sign band.
-        for (int k = 0; k < 5; ++k)
-          c.rect(x0 + 0.03 + k * 0.04, 0.05, x0 + 0.055 + k * 0.04, 0.11, Rgb{240, 240, 230});
+        for (int k = 0; k < 5; ++k) c.rect(x0 + 0.03 + k * 0.04, 0.05, x0 + 0.055 + k * 0.04, 0.11, Rgb{240, 240, 230});
         if (b == 2) {
           drawWindow(c, rng, x0 + 0.07, 0.3, x1 - 0.07, 0.92, frame, glass, true, false, 0.012);
         } else {
@@ -803,8 +797,7 @@ Texture posterTexture(int size, uint32_t seed, int variant) {
   return c.finish("painting");
 }
 
-Texture plainTexture(int size, uint32_t seed, const char* name, Rgb base, double fine, double coarse, int cx,
-                     int cy) {
+Texture plainTexture(int size, uint32_t seed, const char* name, Rgb base, double fine, double coarse, int cx, int cy) {
   Canvas c(size, base, seed);
   c.noise(fine, coarse, cx, cy, 1);
   return c.finish(name);
@@ -951,7 +944,8 @@ struct Region {
   }
   Rect bounds() const {
     Rect b{1e30, 1e30, -1e30, -1e30};
-    for (const auto& r : include) b = {std::min(b.x0, r.x0), std::min(b.y0, r.y0), std::max(b.x1, r.x1), std::max(b.y1, r.y1)};
+    for (const auto& r : include)
+      b = {std::min(b.x0, r.x0), std::min(b.y0, r.y0), std::max(b.x1, r.x1), std::max(b.y1, r.y1)};
     return b;
   }
 };
@@ -1156,10 +1150,14 @@ Model MeshBuilder::build(const std::string& source, uint32_t target_triangles) {
              q.uv[0].v + a * (q.uv[1].v - q.uv[0].v) + b * (q.uv[3].v - q.uv[0].v)};
         const bool last_u = i == nu - 1, last_v = j == nv - 1;
         int corner = -1;
-        if (i == 0 && j == 0) corner = 0;
-        else if (last_u && j == 0) corner = 1;
-        else if (last_u && last_v) corner = 2;
-        else if (i == 0 && last_v) corner = 3;
+        if (i == 0 && j == 0)
+          corner = 0;
+        else if (last_u && j == 0)
+          corner = 1;
+        else if (last_u && last_v)
+          corner = 2;
+        else if (i == 0 && last_v)
+          corner = 3;
         if (corner >= 0) p = q.p[corner], t = q.uv[corner];
         addVertex(p, t, q.color);
       }
@@ -1220,8 +1218,8 @@ void addBox(MeshBuilder& mb, V3 lo, V3 hi, const std::array<FaceLook, 6>& look, 
   const V3 nX{-1, 0, 0}, nY{0, -1, 0};
   const double dx = hi.x - lo.x, dy = hi.y - lo.y, dz = hi.z - lo.z;
   const Frame frames[6] = {
-      {{hi.x, lo.y, lo.z}, Y, Z},   {{lo.x, hi.y, lo.z}, nY, Z}, {{hi.x, hi.y, lo.z}, nX, Z},
-      {{lo.x, lo.y, lo.z}, X, Z},   {{lo.x, lo.y, hi.z}, X, Y},  {{lo.x, hi.y, lo.z}, X, nY},
+      {{hi.x, lo.y, lo.z}, Y, Z}, {{lo.x, hi.y, lo.z}, nY, Z}, {{hi.x, hi.y, lo.z}, nX, Z},
+      {{lo.x, lo.y, lo.z}, X, Z}, {{lo.x, lo.y, hi.z}, X, Y},  {{lo.x, hi.y, lo.z}, X, nY},
   };
   const double ls[6] = {dy, dy, dx, dx, dx, dx};
   const double lt[6] = {dz, dz, dz, dz, dy, dy};
@@ -1264,15 +1262,19 @@ std::vector<WallSeg> regionOutline(const Region& reg) {
     for (int side = 0; side < 2; ++side) {  // side 0: solid at i - 1, outward +x; 1: solid at i, outward -x.
       int j = 0;
       while (j < ny) {
-        auto edge = [&](int jj) { return side == 0 ? inside(i - 1, jj) && !inside(i, jj) : inside(i, jj) && !inside(i - 1, jj); };
+        auto edge = [&](int jj) {
+          return side == 0 ? inside(i - 1, jj) && !inside(i, jj) : inside(i, jj) && !inside(i - 1, jj);
+        };
         if (!edge(j)) {
           ++j;
           continue;
         }
         int k = j;
         while (k < ny && edge(k)) ++k;
-        if (side == 0) walls.push_back({xs[i], ys[j], xs[i], ys[k], 1, 0});
-        else walls.push_back({xs[i], ys[k], xs[i], ys[j], -1, 0});
+        if (side == 0)
+          walls.push_back({xs[i], ys[j], xs[i], ys[k], 1, 0});
+        else
+          walls.push_back({xs[i], ys[k], xs[i], ys[j], -1, 0});
         j = k;
       }
     }
@@ -1281,15 +1283,19 @@ std::vector<WallSeg> regionOutline(const Region& reg) {
     for (int side = 0; side < 2; ++side) {  // side 0: solid at j - 1, outward +y; 1: outward -y.
       int i = 0;
       while (i < nx) {
-        auto edge = [&](int ii) { return side == 0 ? inside(ii, j - 1) && !inside(ii, j) : inside(ii, j) && !inside(ii, j - 1); };
+        auto edge = [&](int ii) {
+          return side == 0 ? inside(ii, j - 1) && !inside(ii, j) : inside(ii, j) && !inside(ii, j - 1);
+        };
         if (!edge(i)) {
           ++i;
           continue;
         }
         int k = i;
         while (k < nx && edge(k)) ++k;
-        if (side == 0) walls.push_back({xs[k], ys[j], xs[i], ys[j], 0, 1});
-        else walls.push_back({xs[i], ys[j], xs[k], ys[j], 0, -1});
+        if (side == 0)
+          walls.push_back({xs[k], ys[j], xs[i], ys[j], 0, 1});
+        else
+          walls.push_back({xs[i], ys[j], xs[k], ys[j], 0, -1});
         i = k;
       }
     }
@@ -1327,12 +1333,12 @@ uint32_t textureSeed(uint32_t seed, uint32_t model, uint32_t index) { return has
 // ================================================================================================
 namespace {
 
-constexpr double kHalfMap = 100.0;   ///< The map spans [-kHalfMap, kHalfMap] in x and y.
-constexpr double kRoadHalf = 6.0;    ///< Half road width.
-constexpr double kWalk = 3.0;        ///< Sidewalk width.
-constexpr double kKerbH = 0.15;      ///< Sidewalk and lot height above the road.
-constexpr double kGap = 0.002;       ///< Loose objects float this far above what they stand on.
-constexpr double kSkirt = 0.05;      ///< Walls and kerbs reach this far below the surface around them.
+constexpr double kHalfMap = 100.0;  ///< The map spans [-kHalfMap, kHalfMap] in x and y.
+constexpr double kRoadHalf = 6.0;   ///< Half road width.
+constexpr double kWalk = 3.0;       ///< Sidewalk width.
+constexpr double kKerbH = 0.15;     ///< Sidewalk and lot height above the road.
+constexpr double kGap = 0.002;      ///< Loose objects float this far above what they stand on.
+constexpr double kSkirt = 0.05;     ///< Walls and kerbs reach this far below the surface around them.
 constexpr int kMaxBuildings = 30;
 
 const V3 kX{1, 0, 0}, kY{0, 1, 0}, kZ{0, 0, 1}, kNegX{-1, 0, 0}, kNegY{0, -1, 0};
@@ -1404,8 +1410,8 @@ void addRoads(MeshBuilder& mb, const CityMaterials& cm, const std::array<double,
 }
 
 /// Raised sidewalk ring with kerb faces, and the lot surface inside it minus `holes`.
-void addBlockGround(MeshBuilder& mb, const CityMaterials& cm, const Rect& blk, int lot_material,
-                    double tile_u, double tile_v, const std::vector<Rect>& holes) {
+void addBlockGround(MeshBuilder& mb, const CityMaterials& cm, const Rect& blk, int lot_material, double tile_u,
+                    double tile_v, const std::vector<Rect>& holes) {
   const double z = kKerbH, w = blk.w(), h = blk.h();
   mb.rect(Frame{{blk.x0, blk.y0, z}, kX, kY}, 0, 0, w, kWalk, UvMap{0.25, blk.x0 / 4, -1 / kWalk, 1}, cm.sidewalk);
   mb.rect(Frame{{blk.x0, blk.y1 - kWalk, z}, kX, kY}, 0, 0, w, kWalk, UvMap{0.25, blk.x0 / 4, 1 / kWalk, 0},
@@ -1510,8 +1516,8 @@ void addBuilding(MeshBuilder& mb, const CityMaterials& cm, const Building& b, Rn
     Region roof;
     for (const Rect& r : fp.include)
       roof.include.push_back({r.x0 + kParapetW, r.y0 + kParapetW, r.x1 - kParapetW, r.y1 - kParapetW});
-    mb.region(horizontalFrame(z1 + kParapetH), Region{fp.include, roof.include}, UvMap{0.25, 0, 0, 0.06},
-              cm.parapet, b.tint);
+    mb.region(horizontalFrame(z1 + kParapetH), Region{fp.include, roof.include}, UvMap{0.25, 0, 0, 0.06}, cm.parapet,
+              b.tint);
     for (const WallSeg& w : regionOutline(roof)) {
       const WallSeg in = reversed(w);
       const double len = in.length();
@@ -1575,15 +1581,24 @@ Building makeBuilding(const Rect& sub, BlockRole role, bool tower, Rng& rng) {
   const double fh = kFacadeStyles[b.style].floor_m;
   int floors = 0;
   switch (role) {
-    case BlockRole::kInner: floors = rng.range(3, 10); break;
-    case BlockRole::kEdge: floors = rng.range(1, 6); break;
-    case BlockRole::kCorner: floors = rng.range(1, 3); break;
+    case BlockRole::kInner:
+      floors = rng.range(3, 10);
+      break;
+    case BlockRole::kEdge:
+      floors = rng.range(1, 6);
+      break;
+    case BlockRole::kCorner:
+      floors = rng.range(1, 3);
+      break;
   }
   if (tower) floors = static_cast<int>(std::floor(53.0 / fh)) - rng.range(0, 3);
   const bool small = !tower && floors <= 3 && std::min(fp.w(), fp.h()) <= 20;
-  if (tower) b.ground = 2;
-  else if (small) b.ground = rng.chance(0.7) ? 1 : 3;
-  else b.ground = rng.chance(0.6) ? 0 : rng.range(1, 3);
+  if (tower)
+    b.ground = 2;
+  else if (small)
+    b.ground = rng.chance(0.7) ? 1 : 3;
+  else
+    b.ground = rng.chance(0.6) ? 0 : rng.range(1, 3);
   const double gf_h = b.ground == 1 ? 3.2 : 4.2;
   b.gf_top = b.base + gf_h;
   const double top = b.gf_top + floors * fh;
@@ -1642,8 +1657,8 @@ void addCar(MeshBuilder& mb, const CityMaterials& cm, double x, double y0, doubl
 
 /// A tree: box trunk and a convex octagonal crown (cone, frustum, cone).
 /// `trunk_h`: trunk height, `r`: crown radius, `tw`: half trunk width, metres.
-void addTree(MeshBuilder& mb, int bark, int leaves, double x, double y, double z, double trunk_h, double r,
-             double tw, Rng& rng) {
+void addTree(MeshBuilder& mb, int bark, int leaves, double x, double y, double z, double trunk_h, double r, double tw,
+             Rng& rng) {
   addBox(mb, {x - tw, y - tw, z + kGap}, {x + tw, y + tw, z + trunk_h}, allFaces(bark, 1.0), kWhite);
   const double za = z + trunk_h + kGap, zb = za + 0.5 * r, zc = zb + 0.8 * r, zt = zc + 0.9 * r;
   const V3 centre{x, y, 0.5 * (za + zt)};
@@ -1663,14 +1678,16 @@ void addTree(MeshBuilder& mb, int bark, int leaves, double x, double y, double z
     const double u0 = double(i) / n * 2, u1 = double(i + 1) / n * 2;
     mb.tri(bottom, lower[i], lower[j], {0.5 * (u0 + u1), 1.0}, {u0, 0.7}, {u1, 0.7}, leaves, tone,
            out(bottom, lower[i], lower[j]));
-    mb.tri(lower[i], lower[j], upper[j], {u0, 0.7}, {u1, 0.7}, {u1, 0.3}, leaves, tone, out(lower[i], lower[j], upper[j]));
-    mb.tri(lower[i], upper[j], upper[i], {u0, 0.7}, {u1, 0.3}, {u0, 0.3}, leaves, tone, out(lower[i], upper[j], upper[i]));
+    mb.tri(lower[i], lower[j], upper[j], {u0, 0.7}, {u1, 0.7}, {u1, 0.3}, leaves, tone,
+           out(lower[i], lower[j], upper[j]));
+    mb.tri(lower[i], upper[j], upper[i], {u0, 0.7}, {u1, 0.3}, {u0, 0.3}, leaves, tone,
+           out(lower[i], upper[j], upper[i]));
     mb.tri(upper[i], upper[j], apex, {u0, 0.3}, {u1, 0.3}, {0.5 * (u0 + u1), 0.0}, leaves, tone,
            out(upper[i], upper[j], apex));
   }
 }
 
-const Rgba8 kCarPaints[] = {{245, 245, 245, 255}, {190, 192, 196, 255}, {50, 52, 56, 255}, {180, 30, 30, 255},
+const Rgba8 kCarPaints[] = {{245, 245, 245, 255}, {190, 192, 196, 255}, {50, 52, 56, 255},   {180, 30, 30, 255},
                             {40, 70, 150, 255},   {30, 90, 60, 255},    {220, 190, 60, 255}, {120, 124, 130, 255}};
 
 }  // namespace
@@ -1697,14 +1714,23 @@ Model makeDemoCity(const DemoModelOptions& options) {
                      i == 3 ? xe[4] : xe[i + 1] - kRoadHalf, j == 3 ? ye[4] : ye[j + 1] - kRoadHalf};
       const Rect lot{blk.x0 + kWalk, blk.y0 + kWalk, blk.x1 - kWalk, blk.y1 - kWalk};
       const bool inner_i = i == 1 || i == 2, inner_j = j == 1 || j == 2;
-      const BlockRole role = inner_i && inner_j ? BlockRole::kInner
-                             : inner_i || inner_j ? BlockRole::kEdge : BlockRole::kCorner;
+      const BlockRole role = inner_i && inner_j   ? BlockRole::kInner
+                             : inner_i || inner_j ? BlockRole::kEdge
+                                                  : BlockRole::kCorner;
       bool park = false;
       int n = 0;
       switch (role) {
-        case BlockRole::kInner: n = rng.range(2, 4); break;
-        case BlockRole::kEdge: park = edge_index++ == park_edge; n = park ? 0 : rng.range(1, 2); break;
-        case BlockRole::kCorner: park = rng.chance(0.5); n = park ? 0 : 1; break;
+        case BlockRole::kInner:
+          n = rng.range(2, 4);
+          break;
+        case BlockRole::kEdge:
+          park = edge_index++ == park_edge;
+          n = park ? 0 : rng.range(1, 2);
+          break;
+        case BlockRole::kCorner:
+          park = rng.chance(0.5);
+          n = park ? 0 : 1;
+          break;
       }
       std::vector<Rect> footprints;
       for (const Rect& sub : splitLot(lot, n, rng)) {
@@ -1720,8 +1746,10 @@ Model makeDemoCity(const DemoModelOptions& options) {
       double tile_u = 10, tile_v = 10;
       if (!park) {
         const double r = rng.uniform();
-        if (r < 0.4 || (i == 1 && j == 1)) lot_mat = cm.parking, tile_u = 10, tile_v = 16;
-        else if (r < 0.8 || role == BlockRole::kInner) lot_mat = cm.plaza, tile_u = tile_v = 8;
+        if (r < 0.4 || (i == 1 && j == 1))
+          lot_mat = cm.parking, tile_u = 10, tile_v = 16;
+        else if (r < 0.8 || role == BlockRole::kInner)
+          lot_mat = cm.plaza, tile_u = tile_v = 8;
       }
       addBlockGround(mb, cm, blk, lot_mat, tile_u, tile_v, footprints);
       auto clear = [&](const Rect& r, double margin) {
@@ -1755,7 +1783,7 @@ Model makeDemoCity(const DemoModelOptions& options) {
       }
       // Street trees on the sidewalks along inner roads, 1 m from the kerb; crowns stay clear
       // of the buildings (>= 1.5 m into the lot) and above the cars.
-      const bool faces_road[4] = {j > 0, j < 3, i > 0, i < 3};  // South, north, west, east sides.
+      const bool faces_road[4] = {j > 0, j<3, i> 0, i < 3};  // South, north, west, east sides.
       for (int side = 0; side < 4; ++side) {
         if (!faces_road[side] || !rng.chance(0.6)) continue;
         const bool along_x = side < 2;
@@ -1887,8 +1915,8 @@ Model makeDemoRoom(const DemoModelOptions& options) {
   for (double z : shelf_z)
     addBox(mb, {bx0 + 0.01 + g, by0 + board + g, z}, {bx1, by1 - board - g, z + board}, allFaces(rm.wood, 1.0),
            shelf_tint);
-  static const Rgba8 kBookColors[] = {{170, 40, 40, 255}, {40, 60, 140, 255},  {40, 110, 60, 255},
-                                      {220, 190, 70, 255}, {40, 40, 44, 255},   {230, 230, 225, 255},
+  static const Rgba8 kBookColors[] = {{170, 40, 40, 255},  {40, 60, 140, 255}, {40, 110, 60, 255},
+                                      {220, 190, 70, 255}, {40, 40, 44, 255},  {230, 230, 225, 255},
                                       {120, 70, 130, 255}, {200, 110, 40, 255}};
   for (size_t k = 0; k + 1 < std::size(shelf_z); ++k) {
     const double z0 = shelf_z[k] + board + g, space = shelf_z[k + 1] - z0 - 0.02;
@@ -1903,9 +1931,9 @@ Model makeDemoRoom(const DemoModelOptions& options) {
       }
       const double h = std::min(space, rng.uniform(0.17, 0.3)), d = rng.uniform(0.15, 0.24);
       std::array<FaceLook, 6> look = allFaces(rm.book);
-      look[kFacePosX].uv = {0, 0, 1, 1};                                         // Spine faces the room.
+      look[kFacePosX].uv = {0, 0, 1, 1};                                                     // Spine faces the room.
       look[kFacePosZ].uv = look[kFaceNegZ].uv = look[kFaceNegX].uv = {0.3, 0.3, 0.7, 0.55};  // Pages.
-      look[kFacePosY].uv = look[kFaceNegY].uv = {0.02, 0.16, 0.1, 0.24};             // Covers.
+      look[kFacePosY].uv = look[kFaceNegY].uv = {0.02, 0.16, 0.1, 0.24};                     // Covers.
       addBox(mb, {bx1 - 0.005 - d, y, z0}, {bx1 - 0.005, y + w, z0 + h}, look, kBookColors[rng.range(0, 7)]);
       y += w + g;
     }

@@ -1,7 +1,7 @@
+#include <fmt/format.h>
+
 #include <cmath>
 #include <filesystem>
-
-#include <fmt/format.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -13,8 +13,7 @@ namespace {
 
 // Writes through a temporary file in the same directory and renames it into place.
 template <typename T>
-Status writeAtomic(const std::string& path, const cv::Mat& mat, const std::vector<int>& params,
-                   const char* ext) {
+Status writeAtomic(const std::string& path, const cv::Mat& mat, const std::vector<int>& params, const char* ext) {
   namespace fs = std::filesystem;
   const std::string tmp = path + ".tmp" + ext;
   try {
@@ -55,22 +54,27 @@ Status writePng(const std::string& path, const ImageU8& image) {
   const int type = CV_8UC(image.channels);
   cv::Mat src(image.height, image.width, type, const_cast<uint8_t*>(image.data.data()));
   cv::Mat bgr;
-  if (image.channels == 4) cv::cvtColor(src, bgr, cv::COLOR_RGBA2BGRA);
-  else if (image.channels == 3) cv::cvtColor(src, bgr, cv::COLOR_RGB2BGR);
-  else bgr = src;
+  if (image.channels == 4)
+    cv::cvtColor(src, bgr, cv::COLOR_RGBA2BGRA);
+  else if (image.channels == 3)
+    cv::cvtColor(src, bgr, cv::COLOR_RGB2BGR);
+  else
+    bgr = src;
   return writeAtomic<uint8_t>(path, bgr, {cv::IMWRITE_PNG_COMPRESSION, 3}, ".png");
 }
 
 Status writePng(const std::string& path, const ImageU16& image) {
   VKLOC_TRY_STATUS(checkImage(path, image));
-  if (image.channels != 1) return makeError(ErrorCode::kInvalidArgument, fmt::format("{}: 16-bit PNG must be gray", path));
+  if (image.channels != 1)
+    return makeError(ErrorCode::kInvalidArgument, fmt::format("{}: 16-bit PNG must be gray", path));
   cv::Mat src(image.height, image.width, CV_16UC1, const_cast<uint16_t*>(image.data.data()));
   return writeAtomic<uint16_t>(path, src, {cv::IMWRITE_PNG_COMPRESSION, 3}, ".png");
 }
 
 Status writeFloatTiff(const std::string& path, const ImageF32& image) {
   VKLOC_TRY_STATUS(checkImage(path, image));
-  if (image.channels != 1) return makeError(ErrorCode::kInvalidArgument, fmt::format("{}: float TIFF must be 1 channel", path));
+  if (image.channels != 1)
+    return makeError(ErrorCode::kInvalidArgument, fmt::format("{}: float TIFF must be 1 channel", path));
   cv::Mat src(image.height, image.width, CV_32FC1, const_cast<float*>(image.data.data()));
   return writeAtomic<float>(path, src, {cv::IMWRITE_TIFF_COMPRESSION, 1}, ".tiff");
 }
@@ -92,8 +96,10 @@ Result<ImageU8> readImageU8(const std::string& path, int channels) {
   if (m.depth() != CV_8U) m.convertTo(m, CV_8U, 1.0 / 256.0);
   ImageU8 out(m.cols, m.rows, channels);
   cv::Mat dst(m.rows, m.cols, CV_8UC(channels), out.data.data());
-  if (channels == 4) cv::cvtColor(m, dst, cv::COLOR_BGR2RGBA);
-  else m.copyTo(dst);
+  if (channels == 4)
+    cv::cvtColor(m, dst, cv::COLOR_BGR2RGBA);
+  else
+    m.copyTo(dst);
   return out;
 }
 

@@ -451,9 +451,10 @@ Result<Model> loadChecked(const std::string& path, const ModelLoadOptions& optio
   float reach = 0.0f;
   for (int k = 0; k < 3; ++k) reach = std::max({reach, std::abs(model.bounds.min[k]), std::abs(model.bounds.max[k])});
   if (reach > 1600.0f) {
-    warnings.push_back(fmt::format("{}: coordinates reach {:.0f} m from the world origin, where positions are rounded to "
-                                   "{:.2f} mm; place the world origin near the model (T_world_model)",
-                                   path, reach, reach * 1000.0 / (1 << 24)));
+    warnings.push_back(
+        fmt::format("{}: coordinates reach {:.0f} m from the world origin, where positions are rounded to "
+                    "{:.2f} mm; place the world origin near the model (T_world_model)",
+                    path, reach, reach * 1000.0 / (1 << 24)));
   }
   return model;
 }

@@ -1,6 +1,12 @@
 // Model writers: OBJ (+ MTL, PNG), PLY, glTF / GLB (optionally Draco-compressed) and Draco.
 #include "vkloc/model_write.hpp"
 
+#include <draco/compression/decode.h>
+#include <draco/compression/encode.h>
+#include <draco/core/decoder_buffer.h>
+#include <draco/core/encoder_buffer.h>
+#include <draco/mesh/mesh.h>
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -16,20 +22,13 @@
 #include <fstream>
 #include <functional>
 #include <memory>
-#include <set>
-#include <string>
-#include <vector>
-
-#include <draco/compression/decode.h>
-#include <draco/compression/encode.h>
-#include <draco/core/decoder_buffer.h>
-#include <draco/core/encoder_buffer.h>
-#include <draco/mesh/mesh.h>
-#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <set>
+#include <string>
+#include <vector>
 
 namespace vkloc {
 namespace {
@@ -63,13 +62,16 @@ std::string safeName(const std::string& text) {
 // ---- checks ------------------------------------------------------------------------------------
 
 Status checkModel(const Model& m, const std::string& path) {
-  auto bad = [&](const std::string& what) { return fileError(ErrorCode::kInvalidArgument, path, "cannot write model: " + what); };
+  auto bad = [&](const std::string& what) {
+    return fileError(ErrorCode::kInvalidArgument, path, "cannot write model: " + what);
+  };
   if (m.positions.size() % 3 != 0) return bad("positions size is not a multiple of 3");
   const size_t n = m.vertexCount();
   if (!m.uvs.empty() && m.uvs.size() != 2 * n) return bad(fmt::format("{} uv values for {} vertices", m.uvs.size(), n));
   if (!m.colors.empty() && m.colors.size() != 4 * n)
     return bad(fmt::format("{} colour bytes for {} vertices", m.colors.size(), n));
-  if (m.indices.empty() || m.indices.size() % 3 != 0) return bad("no triangles (index count must be a positive multiple of 3)");
+  if (m.indices.empty() || m.indices.size() % 3 != 0)
+    return bad("no triangles (index count must be a positive multiple of 3)");
   for (float v : m.positions)
     if (!std::isfinite(v)) return bad("non-finite vertex position");
   for (float v : m.uvs)
@@ -80,14 +82,16 @@ Status checkModel(const Model& m, const std::string& path) {
   for (const DrawRange& r : m.ranges) {
     if (r.first_index % 3 != 0 || r.index_count % 3 != 0 || uint64_t(r.first_index) + r.index_count > m.indices.size())
       return bad("draw range outside the index array");
-    if (r.material < 0 || static_cast<size_t>(r.material) >= nm) return bad(fmt::format("draw range material {} does not exist", r.material));
+    if (r.material < 0 || static_cast<size_t>(r.material) >= nm)
+      return bad(fmt::format("draw range material {} does not exist", r.material));
   }
   for (const Material& mat : m.materials)
     if (mat.texture >= static_cast<int>(m.textures.size()))
       return bad(fmt::format("material '{}' references missing texture {}", mat.name, mat.texture));
   for (const Texture& t : m.textures)
     if (t.width <= 0 || t.height <= 0 || t.rgba.size() != size_t(t.width) * t.height * 4)
-      return bad(fmt::format("texture '{}' size {}x{} does not match its {} bytes", t.name, t.width, t.height, t.rgba.size()));
+      return bad(
+          fmt::format("texture '{}' size {}x{} does not match its {} bytes", t.name, t.width, t.height, t.rgba.size()));
   return Status::success();
 }
 
@@ -157,7 +161,8 @@ class FileSet {
     const std::string tmp = fmt::format("{}.tmp{}-{}", final_path, ::getpid(), counter++);
     files_.push_back({tmp, final_path});
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) return fileError(ErrorCode::kIoError, final_path, fmt::format("cannot create file ({})", std::strerror(errno)));
+    if (!out)
+      return fileError(ErrorCode::kIoError, final_path, fmt::format("cannot create file ({})", std::strerror(errno)));
     const bool ok = writer(out);
     out.close();
     if (!ok || out.fail()) return fileError(ErrorCode::kIoError, final_path, "write failed (disk full?)");
@@ -322,9 +327,10 @@ void put(std::vector<uint8_t>& out, T v) {
 Status writePly(const Model& m, const std::string& path, FileSet& files) {
   const size_t n = m.vertexCount(), nt = m.triangleCount();
   const bool uv = !m.uvs.empty(), col = !m.colors.empty();
-  std::string header = fmt::format("ply\nformat binary_little_endian 1.0\ncomment vkloc model\nelement vertex {}\n"
-                                   "property float x\nproperty float y\nproperty float z\n",
-                                   n);
+  std::string header = fmt::format(
+      "ply\nformat binary_little_endian 1.0\ncomment vkloc model\nelement vertex {}\n"
+      "property float x\nproperty float y\nproperty float z\n",
+      n);
   if (uv) header += "property float s\nproperty float t\n";
   if (col) header += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
   header += fmt::format("element face {}\nproperty list uchar int vertex_indices\nend_header\n", nt);
@@ -371,8 +377,7 @@ Result<DracoBlob> encodeDraco(const std::vector<float>& positions, const std::ve
   auto add = [&](draco::GeometryAttribute::Type type, int components, draco::DataType dt, bool normalized,
                  const void* data, size_t bytes_per_value) {
     draco::GeometryAttribute ga;
-    ga.Init(type, nullptr, static_cast<uint8_t>(components), dt, normalized,
-            static_cast<int64_t>(bytes_per_value), 0);
+    ga.Init(type, nullptr, static_cast<uint8_t>(components), dt, normalized, static_cast<int64_t>(bytes_per_value), 0);
     const int id = mesh.AddAttribute(ga, true, n);
     mesh.attribute(id)->buffer()->Write(0, data, bytes_per_value * n);
     return id;
@@ -411,7 +416,8 @@ Result<DracoBlob> encodeDraco(const std::vector<float>& positions, const std::ve
   in.Init(reinterpret_cast<const char*>(blob.bytes.data()), blob.bytes.size());
   draco::Decoder decoder;
   auto decoded = decoder.DecodeMeshFromBuffer(&in);
-  if (!decoded.ok()) return fileError(ErrorCode::kIoError, path, "Draco round trip failed: " + decoded.status().error_msg_string());
+  if (!decoded.ok())
+    return fileError(ErrorCode::kIoError, path, "Draco round trip failed: " + decoded.status().error_msg_string());
   const std::unique_ptr<draco::Mesh> back = std::move(decoded).value();
   blob.decoded_points = back->num_points();
   blob.decoded_faces = back->num_faces();
@@ -490,13 +496,14 @@ class GltfWriter {
         prim["extensions"] = {{"KHR_draco_mesh_compression", {{"bufferView", view}, {"attributes", ids}}}};
       } else {
         std::array<float, 3> lo{1e30f, 1e30f, 1e30f}, hi{-1e30f, -1e30f, -1e30f};
-        for (size_t i = 0; i < pos.size(); ++i) lo[i % 3] = std::min(lo[i % 3], pos[i]), hi[i % 3] = std::max(hi[i % 3], pos[i]);
+        for (size_t i = 0; i < pos.size(); ++i)
+          lo[i % 3] = std::min(lo[i % 3], pos[i]), hi[i % 3] = std::max(hi[i % 3], pos[i]);
         json attributes;
-        attributes["POSITION"] = addAccessor(static_cast<int>(addView(pos.data(), pos.size() * 4, kArrayBuffer)), kFloat,
-                                             used.size(), "VEC3", false, &lo, &hi);
+        attributes["POSITION"] = addAccessor(static_cast<int>(addView(pos.data(), pos.size() * 4, kArrayBuffer)),
+                                             kFloat, used.size(), "VEC3", false, &lo, &hi);
         if (!uv.empty())
-          attributes["TEXCOORD_0"] =
-              addAccessor(static_cast<int>(addView(uv.data(), uv.size() * 4, kArrayBuffer)), kFloat, used.size(), "VEC2");
+          attributes["TEXCOORD_0"] = addAccessor(static_cast<int>(addView(uv.data(), uv.size() * 4, kArrayBuffer)),
+                                                 kFloat, used.size(), "VEC2");
         if (!col.empty())
           attributes["COLOR_0"] = addAccessor(static_cast<int>(addView(col.data(), col.size(), kArrayBuffer)),
                                               kUnsignedByte, used.size(), "VEC4", true);

@@ -1,16 +1,15 @@
 #include "vkloc/pose.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
 #include <vector>
 
-#include <fmt/format.h>
-
 namespace vkloc {
 
-Result<Pose> lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
-                    const Eigen::Vector3d& up_world) {
+Result<Pose> lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target, const Eigen::Vector3d& up_world) {
   if (!eye.allFinite() || !target.allFinite() || !up_world.allFinite()) {
     return makeError(ErrorCode::kInvalidArgument, "lookAt: non-finite eye, target or up");
   }
@@ -42,8 +41,7 @@ Result<Pose> lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
 bool isValidPose(const Pose& T) {
   if (!T.matrix().allFinite()) return false;
   const Eigen::Matrix3d R = T.linear();
-  return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 &&
-         R.determinant() > 0;
+  return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 && R.determinant() > 0;
 }
 
 Result<Pose> parsePose(const std::string& text) {
@@ -89,8 +87,8 @@ Result<Pose> parsePose(const std::string& text) {
 std::string formatPose(const Pose& T) {
   const Eigen::Quaterniond q(T.linear());
   const Eigen::Vector3d t = T.translation();
-  return fmt::format("{:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g}", t.x(), t.y(), t.z(), q.x(), q.y(),
-                     q.z(), q.w());
+  return fmt::format("{:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g}", t.x(), t.y(), t.z(), q.x(), q.y(), q.z(),
+                     q.w());
 }
 
 }  // namespace vkloc

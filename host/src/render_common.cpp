@@ -1,7 +1,7 @@
 // Projection and frustum helpers shared by the GPU renderer and the CPU reference.
-#include <cmath>
-
 #include <fmt/format.h>
+
+#include <cmath>
 
 #include "vkloc/render.hpp"
 
@@ -12,9 +12,9 @@ Status validateRenderSettings(const RenderSettings& s) {
     return makeError(ErrorCode::kInvalidArgument, fmt::format("render: near = {} m must be at least 1e-6 m", s.near_m));
   }
   if (!(s.far_m > s.near_m) || !std::isfinite(s.far_m) || s.far_m / s.near_m > 1e9) {
-    return makeError(ErrorCode::kInvalidArgument,
-                     fmt::format("render: far = {} m must be finite, above near = {} m and at most 1e9 x near", s.far_m,
-                                 s.near_m));
+    return makeError(
+        ErrorCode::kInvalidArgument,
+        fmt::format("render: far = {} m must be finite, above near = {} m and at most 1e9 x near", s.far_m, s.near_m));
   }
   if (!(s.lod_pixel_error >= 0) || !std::isfinite(s.lod_pixel_error)) {
     return makeError(ErrorCode::kInvalidArgument,
@@ -44,8 +44,8 @@ Eigen::Matrix4d projectionMatrix(const PinholeCamera& camera, double near_m, dou
   return P;
 }
 
-bool aabbInFrustum(const Aabb& box, const PinholeCamera& camera, const Pose& T_world_camera,
-                   double near_m, double far_m) {
+bool aabbInFrustum(const Aabb& box, const PinholeCamera& camera, const Pose& T_world_camera, double near_m,
+                   double far_m) {
   if (box.empty()) return false;
   // Frustum planes in the camera frame as n . p >= d (inside), then tested against the box's
   // eight corners transformed into the camera frame.
@@ -56,14 +56,12 @@ bool aabbInFrustum(const Aabb& box, const PinholeCamera& camera, const Pose& T_w
   const double xr = (w - 0.5 - camera.cx) / camera.fx;
   const double yt = (-0.5 - camera.cy) / camera.fy;
   const double yb = (h - 0.5 - camera.cy) / camera.fy;
-  const Eigen::Vector3d normals[6] = {
-      {1, 0, -xl}, {-1, 0, xr}, {0, 1, -yt}, {0, -1, yb}, {0, 0, 1}, {0, 0, -1}};
+  const Eigen::Vector3d normals[6] = {{1, 0, -xl}, {-1, 0, xr}, {0, 1, -yt}, {0, -1, yb}, {0, 0, 1}, {0, 0, -1}};
   const double offsets[6] = {0, 0, 0, 0, near_m, -far_m};
   const Pose T_camera_world = T_world_camera.inverse();
   Eigen::Vector3d corners[8];
   for (int i = 0; i < 8; ++i) {
-    const Eigen::Vector3d p_world((i & 1) ? box.max[0] : box.min[0],
-                                  (i & 2) ? box.max[1] : box.min[1],
+    const Eigen::Vector3d p_world((i & 1) ? box.max[0] : box.min[0], (i & 2) ? box.max[1] : box.min[1],
                                   (i & 4) ? box.max[2] : box.min[2]);
     corners[i] = T_camera_world * p_world;
   }

@@ -4,13 +4,20 @@ namespace vkloc {
 
 const char* errorCodeName(ErrorCode code) {
   switch (code) {
-    case ErrorCode::kInvalidArgument: return "invalid argument";
-    case ErrorCode::kNotFound: return "not found";
-    case ErrorCode::kIoError: return "i/o error";
-    case ErrorCode::kMalformedInput: return "malformed input";
-    case ErrorCode::kUnsupported: return "unsupported";
-    case ErrorCode::kNoDevice: return "no device";
-    case ErrorCode::kGpuError: return "gpu error";
+    case ErrorCode::kInvalidArgument:
+      return "invalid argument";
+    case ErrorCode::kNotFound:
+      return "not found";
+    case ErrorCode::kIoError:
+      return "i/o error";
+    case ErrorCode::kMalformedInput:
+      return "malformed input";
+    case ErrorCode::kUnsupported:
+      return "unsupported";
+    case ErrorCode::kNoDevice:
+      return "no device";
+    case ErrorCode::kGpuError:
+      return "gpu error";
   }
   return "unknown error";
 }

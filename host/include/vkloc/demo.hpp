@@ -20,7 +20,7 @@ struct DemoModelOptions {
   /// (so neighbouring faces stay crack-free) whose spacing is chosen to bring the total triangle
   /// count within +-10% of this. Targets below the natural size give the natural model.
   uint32_t target_triangles = 0;
-  int texture_size = 256;         ///< Side of each generated square texture, pixels (16..4096).
+  int texture_size = 256;  ///< Side of each generated square texture, pixels (16..4096).
 };
 
 /// A textured urban block in the world frame (z up, metres, ground at z = 0 over about

@@ -83,8 +83,7 @@ class GpuRenderer {
  public:
   /// Uploads the model (vertices, indices, textures). kInvalidArgument for an invalid model,
   /// kGpuError when the device runs out of memory.
-  static Result<std::unique_ptr<GpuRenderer>> create(std::shared_ptr<GpuContext> context,
-                                                     const Model& model,
+  static Result<std::unique_ptr<GpuRenderer>> create(std::shared_ptr<GpuContext> context, const Model& model,
                                                      const GpuRendererOptions& options = {});
   ~GpuRenderer();
 

@@ -18,13 +18,11 @@ struct Image {
   std::vector<T> data;  ///< width * height * channels values.
 
   Image() = default;
-  Image(int w, int h, int c, T fill = T{}) : width(w), height(h), channels(c),
-      data(static_cast<size_t>(w) * h * c, fill) {}
+  Image(int w, int h, int c, T fill = T{})
+      : width(w), height(h), channels(c), data(static_cast<size_t>(w) * h * c, fill) {}
   bool empty() const { return data.empty(); }
   T& at(int x, int y, int c = 0) { return data[(static_cast<size_t>(y) * width + x) * channels + c]; }
-  const T& at(int x, int y, int c = 0) const {
-    return data[(static_cast<size_t>(y) * width + x) * channels + c];
-  }
+  const T& at(int x, int y, int c = 0) const { return data[(static_cast<size_t>(y) * width + x) * channels + c]; }
 };
 
 using ImageU8 = Image<uint8_t>;

@@ -50,8 +50,8 @@ struct DrawRange {
 /// to exactly one block (by centroid); bounds enclose whole triangles, so neighbouring blocks'
 /// bounds overlap, as the overlapping blocks of seed 000 §III do.
 struct Block {
-  Aabb bounds;                  ///< World frame, metres.
-  uint32_t first_range = 0;     ///< Offset into Model::ranges.
+  Aabb bounds;               ///< World frame, metres.
+  uint32_t first_range = 0;  ///< Offset into Model::ranges.
   uint32_t range_count = 0;
   uint32_t triangle_count = 0;
 };
@@ -62,16 +62,16 @@ struct Block {
 /// `uvs` and `colors` may be empty when the source has none. Texture coordinates follow the
 /// Vulkan/glTF convention: (0, 0) is the top-left of the texture image.
 struct Model {
-  std::string source;                ///< File the model came from, for messages.
-  std::vector<float> positions;      ///< x, y, z per vertex, world frame, metres.
-  std::vector<float> uvs;            ///< u, v per vertex, or empty.
-  std::vector<uint8_t> colors;       ///< RGBA8 per vertex (sRGB-encoded as stored), or empty.
-  std::vector<uint32_t> indices;     ///< 3 per triangle, counter-clockwise seen from outside.
-  std::vector<Material> materials;   ///< At least one after loading.
+  std::string source;               ///< File the model came from, for messages.
+  std::vector<float> positions;     ///< x, y, z per vertex, world frame, metres.
+  std::vector<float> uvs;           ///< u, v per vertex, or empty.
+  std::vector<uint8_t> colors;      ///< RGBA8 per vertex (sRGB-encoded as stored), or empty.
+  std::vector<uint32_t> indices;    ///< 3 per triangle, counter-clockwise seen from outside.
+  std::vector<Material> materials;  ///< At least one after loading.
   std::vector<Texture> textures;
-  std::vector<DrawRange> ranges;     ///< Sorted by block, then material.
-  std::vector<Block> blocks;         ///< At least one after loading (may be the whole model).
-  Aabb bounds;                       ///< World frame, metres.
+  std::vector<DrawRange> ranges;  ///< Sorted by block, then material.
+  std::vector<Block> blocks;      ///< At least one after loading (may be the whole model).
+  Aabb bounds;                    ///< World frame, metres.
 
   size_t vertexCount() const { return positions.size() / 3; }
   size_t triangleCount() const { return indices.size() / 3; }

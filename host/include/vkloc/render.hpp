@@ -20,12 +20,12 @@ enum RenderOutputFlags : uint32_t {
 
 /// Depth range and appearance settings of a render.
 struct RenderSettings {
-  double near_m = 0.05;     ///< Near clip plane, metres (camera z). Surfaces closer are clipped.
-  double far_m = 5000.0;    ///< Far clip plane, metres. Surfaces farther are background.
+  double near_m = 0.05;   ///< Near clip plane, metres (camera z). Surfaces closer are clipped.
+  double far_m = 5000.0;  ///< Far clip plane, metres. Surfaces farther are background.
   /// RGBA8 written where no surface is seen.
   std::array<uint8_t, 4> background_rgba{0, 0, 0, 0};
-  bool cull_back_faces = false;  ///< Skip triangles seen from behind (needs consistent winding).
-  uint32_t outputs = kRenderAll; ///< RenderOutputFlags to fill.
+  bool cull_back_faces = false;   ///< Skip triangles seen from behind (needs consistent winding).
+  uint32_t outputs = kRenderAll;  ///< RenderOutputFlags to fill.
   /// Level of detail: blocks far enough away are drawn simplified when the simplification's
   /// geometric error projects to at most this many pixels (errors measured at block creation,
   /// projected from the nearest point of the block's bounds). 0 always draws full detail. The
@@ -38,8 +38,8 @@ constexpr float kBackgroundDepth = 0.0f;
 
 /// A rendered view. Images are camera.width x camera.height, rows top to bottom.
 struct RenderOutput {
-  ImageU8 rgba;     ///< 4 channels, sRGB-encoded colour as stored in textures; alpha 255 on surfaces.
-  ImageU8 gray;     ///< 1 channel, BT.601 luma of rgba.
+  ImageU8 rgba;  ///< 4 channels, sRGB-encoded colour as stored in textures; alpha 255 on surfaces.
+  ImageU8 gray;  ///< 1 channel, BT.601 luma of rgba.
   /// 1 channel, metres: camera-frame z of the visible surface (not the distance along the ray);
   /// kBackgroundDepth (0) where no surface is seen.
   ImageF32 depth;
@@ -62,14 +62,13 @@ Eigen::Matrix4d projectionMatrix(const PinholeCamera& camera, double near_m, dou
 
 /// Returns true when the box may intersect the camera's view frustum (near..far), false when
 /// it lies entirely outside one of the six planes.
-bool aabbInFrustum(const Aabb& box, const PinholeCamera& camera, const Pose& T_world_camera,
-                   double near_m, double far_m);
+bool aabbInFrustum(const Aabb& box, const PinholeCamera& camera, const Pose& T_world_camera, double near_m,
+                   double far_m);
 
 /// CPU reference renderer: scanline rasterizer with the same conventions as the GPU renderer
 /// (pixel-centre sampling, top-left fill rule, perspective-correct attributes, bilinear
 /// repeat texture sampling, nearest depth wins). Slow; meant as a test oracle.
-Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& camera,
-                                     const Pose& T_world_camera,
+Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& camera, const Pose& T_world_camera,
                                      const RenderSettings& settings = {});
 
 }  // namespace vkloc

@@ -32,23 +32,35 @@ struct Error {
 template <typename T>
 class [[nodiscard]] Result {
  public:
-  Result(T value) : storage_(std::move(value)) {}        // NOLINT(google-explicit-constructor)
-  Result(Error error) : storage_(std::move(error)) {}    // NOLINT(google-explicit-constructor)
+  Result(T value) : storage_(std::move(value)) {}      // NOLINT(google-explicit-constructor)
+  Result(Error error) : storage_(std::move(error)) {}  // NOLINT(google-explicit-constructor)
 
   bool ok() const { return storage_.index() == 0; }
   explicit operator bool() const { return ok(); }
 
   /// Precondition: ok().
-  T& value() & { assert(ok()); return std::get<0>(storage_); }
-  const T& value() const& { assert(ok()); return std::get<0>(storage_); }
-  T&& value() && { assert(ok()); return std::get<0>(std::move(storage_)); }
+  T& value() & {
+    assert(ok());
+    return std::get<0>(storage_);
+  }
+  const T& value() const& {
+    assert(ok());
+    return std::get<0>(storage_);
+  }
+  T&& value() && {
+    assert(ok());
+    return std::get<0>(std::move(storage_));
+  }
   T* operator->() { return &value(); }
   const T* operator->() const { return &value(); }
   T& operator*() & { return value(); }
   const T& operator*() const& { return value(); }
 
   /// Precondition: !ok().
-  const Error& error() const { assert(!ok()); return std::get<1>(storage_); }
+  const Error& error() const {
+    assert(!ok());
+    return std::get<1>(storage_);
+  }
 
  private:
   std::variant<T, Error> storage_;
@@ -63,7 +75,10 @@ class [[nodiscard]] Status {
   bool ok() const { return ok_; }
   explicit operator bool() const { return ok_; }
   /// Precondition: !ok().
-  const Error& error() const { assert(!ok_); return error_; }
+  const Error& error() const {
+    assert(!ok_);
+    return error_;
+  }
 
  private:
   Error error_;
@@ -71,15 +86,13 @@ class [[nodiscard]] Status {
 };
 
 /// Builds an Error; message is one line naming the thing at fault and the fix.
-inline Error makeError(ErrorCode code, std::string message) {
-  return Error{code, std::move(message)};
-}
+inline Error makeError(ErrorCode code, std::string message) { return Error{code, std::move(message)}; }
 
 }  // namespace vkloc
 
 /// Returns the error of a failed Status/Result expression from the enclosing function.
-#define VKLOC_TRY_STATUS(expr)                  \
-  do {                                          \
-    auto vkloc_try_status_ = (expr);            \
+#define VKLOC_TRY_STATUS(expr)                                     \
+  do {                                                             \
+    auto vkloc_try_status_ = (expr);                               \
     if (!vkloc_try_status_.ok()) return vkloc_try_status_.error(); \
   } while (0)
