@@ -328,7 +328,7 @@ Result<std::shared_ptr<GpuContext>> GpuContext::create(const GpuOptions& options
   vkGetPhysicalDeviceProperties(impl->physical, &impl->properties);
   vkGetPhysicalDeviceMemoryProperties(impl->physical, &impl->memory_properties);
 
-  if (impl->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) {
+  if (options.tune_allocator && impl->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) {
     // lavapipe allocates and frees multi-megabyte buffers per draw; with glibc's default
     // trimming every draw faults its pages back in (5x slower draws, LAVAPIPE.md pitfall 1).
     mallopt(M_MMAP_THRESHOLD, 32 << 20);

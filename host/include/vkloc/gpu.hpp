@@ -37,6 +37,11 @@ struct GpuOptions {
   /// uploads and readback then go through staging copies as on a discrete GPU. For testing
   /// that path on any device.
   bool force_staging = false;
+  /// On a CPU device (lavapipe), sets glibc's mmap threshold to 32 MiB and trim threshold to
+  /// 1 GiB for the whole process: lavapipe allocates and frees multi-megabyte buffers per draw,
+  /// and with the defaults every draw faults its pages back in (about 5x slower draws). false
+  /// leaves the process allocator alone.
+  bool tune_allocator = true;
 };
 
 /// Owns the Vulkan instance and device. Create once, share between renderers; not thread-safe.
