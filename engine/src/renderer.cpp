@@ -423,6 +423,14 @@ Result<VkPipeline> GpuRenderer::Impl::pipeline(bool normals, bool cull) {
 
 Status GpuRenderer::Impl::ensureTargets(uint32_t width, uint32_t height) {
   if (targets.width == width && targets.height == height) return Status::success();
+  const VkPhysicalDeviceLimits& limits = ctx->properties.limits;
+  if (width > limits.maxFramebufferWidth || height > limits.maxFramebufferHeight ||
+      width > limits.maxImageDimension2D || height > limits.maxImageDimension2D) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("render: {}x{} exceeds this device's largest framebuffer {}x{}", width, height,
+                                 std::min(limits.maxFramebufferWidth, limits.maxImageDimension2D),
+                                 std::min(limits.maxFramebufferHeight, limits.maxImageDimension2D)));
+  }
   vkDeviceWaitIdle(device);
   targets = Targets{};
   const VkImageUsageFlags color_usage =
