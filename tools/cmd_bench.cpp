@@ -22,6 +22,7 @@ struct BenchArgs {
   bool cull = true;
   double roughness_m = 0.03;
   double lod_pixel_error = 0.5;
+  uint32_t block_triangles = 32768;
 };
 
 // Displaces every vertex by up to `amplitude` metres in a direction hashed from its position,
@@ -46,7 +47,6 @@ void roughen(Model& model, double amplitude) {
       model.positions[i + k] += static_cast<float>(amplitude * hash(x, y, z, k));
     }
   }
-  buildBlocks(model, 32768);  // block and model bounds follow the moved vertices
 }
 
 struct Stats {
@@ -76,6 +76,7 @@ void run(const BenchArgs& a) {
     options.target_triangles = target;
     Model model = makeDemoCity(options);
     if (target > 20000) roughen(model, a.roughness_m);
+    buildBlocks(model, a.block_triangles);
     auto t0 = std::chrono::steady_clock::now();
     auto renderer = take(GpuRenderer::create(context, model));
     const double create_ms = msSince(t0);
@@ -150,6 +151,9 @@ void addBenchVerb(CLI::App& app) {
   render
       ->add_option("--roughness", args->roughness_m,
                    "Random vertex displacement of the enlarged models, metres (photogrammetry-like)")
+      ->capture_default_str();
+  render->add_option("--block-triangles", args->block_triangles, "Triangles per spatial block (culling granularity)")
+      ->check(CLI::Range(0u, 1u << 30))
       ->capture_default_str();
   render->add_option("--lod-pixel-error", args->lod_pixel_error, "Level-of-detail error bound, pixels")
       ->capture_default_str();
