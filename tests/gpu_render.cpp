@@ -80,7 +80,9 @@ TEST_F(GpuRender, PlaneDepthMatchesAnalyticOverNearAndFarRange) {
       }
     }
     EXPECT_GT(compared, 10000);
-    EXPECT_LT(worst, 1e-4) << "distance " << distance;
+    // The issue asks for 1e-4; float reverse-Z with 1 / gl_FragCoord.w measures ~2e-7 at every
+    // distance here, so a tenfold margin over that catches regressions early.
+    EXPECT_LT(worst, 2e-6) << "distance " << distance;
   }
 }
 
@@ -111,7 +113,7 @@ TEST_F(GpuRender, BoxDepthSilhouetteAndNormalsMatchAnalytic) {
       if (std::abs(z - hit->t) / hit->t < 1e-5) worst_normal_deg = std::max(worst_normal_deg, angle);
     }
   }
-  EXPECT_LT(worst, 1e-4);
+  EXPECT_LT(worst, 1e-5);
   EXPECT_LT(worst_normal_deg, 0.5);
   EXPECT_EQ(silhouetteErrorsBeyondOnePixel(out.depth, analytic), 0);
   EXPECT_EQ(silhouetteErrorsBeyondOnePixel(analytic, out.depth), 0);
@@ -137,7 +139,7 @@ TEST_F(GpuRender, SphereMatchesRayCastAndReference) {
     }
   }
   EXPECT_GT(compared, 1500);
-  EXPECT_LT(worst, 1e-4);
+  EXPECT_LT(worst, 1e-5);
   EXPECT_EQ(silhouetteErrorsBeyondOnePixel(out.depth, ref->depth), 0);
   EXPECT_EQ(silhouetteErrorsBeyondOnePixel(ref->depth, out.depth), 0);
 }
