@@ -430,10 +430,12 @@ Result<engine::Buffer> GpuContext::Impl::createBuffer(VkDeviceSize size, VkBuffe
   return out;
 }
 
-bool GpuContext::Impl::linearSupports(VkFormat format, VkFormatFeatureFlags features) const {
-  VkFormatProperties p{};
-  vkGetPhysicalDeviceFormatProperties(physical, format, &p);
-  return (p.linearTilingFeatures & features) == features;
+bool GpuContext::Impl::linearImageSupported(VkFormat format, VkImageUsageFlags usage, uint32_t width,
+                                            uint32_t height) const {
+  VkImageFormatProperties p{};
+  const VkResult r = vkGetPhysicalDeviceImageFormatProperties(physical, format, VK_IMAGE_TYPE_2D,
+                                                              VK_IMAGE_TILING_LINEAR, usage, 0, &p);
+  return r == VK_SUCCESS && p.maxExtent.width >= width && p.maxExtent.height >= height;
 }
 
 Result<engine::Image> GpuContext::Impl::createImage(uint32_t width, uint32_t height, VkFormat format,

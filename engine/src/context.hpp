@@ -51,8 +51,9 @@ struct GpuContext::Impl {
   Result<engine::Image> createImage(uint32_t width, uint32_t height, VkFormat format, VkImageUsageFlags usage,
                                     VkImageAspectFlags aspect, bool linear_host = false);
 
-  /// True when `format` supports `features` with linear tiling.
-  bool linearSupports(VkFormat format, VkFormatFeatureFlags features) const;
+  /// True when a linear-tiling 2D image of `format` with exactly `usage` and at least this
+  /// size can be created.
+  bool linearImageSupported(VkFormat format, VkImageUsageFlags usage, uint32_t width, uint32_t height) const;
 
   /// Copies host data into a buffer: directly when mapped, else through a staging buffer.
   Status upload(engine::Buffer& dst, const void* data, VkDeviceSize size);

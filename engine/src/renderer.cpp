@@ -30,6 +30,9 @@ constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kLinearDepthFormat = VK_FORMAT_R32_SFLOAT;
 constexpr VkFormat kNormalFormat = VK_FORMAT_R32_UINT;   // octahedral, packSnorm2x16
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;  // reverse-Z
+// Colour targets: rendered, copied (readback on the copy path) and sampled by later stages.
+constexpr VkImageUsageFlags kTargetUsage =
+    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
 
 // Interleaved per-vertex attributes of binding 1 (binding 0 holds positions alone, so
 // depth-only passes can skip these).
@@ -144,7 +147,7 @@ Status GpuRenderer::Impl::init(const Model& model, const GpuRendererOptions& opt
   device = ctx->device;
   direct_readback = options.direct_readback && ctx->unified_memory;
   for (VkFormat f : {kColorFormat, kLinearDepthFormat, kNormalFormat}) {
-    direct_readback = direct_readback && ctx->linearSupports(f, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT);
+    direct_readback = direct_readback && ctx->linearImageSupported(f, kTargetUsage, 1, 1);
   }
   VKLOC_TRY_STATUS(validateModel(model));
   materials = model.materials;
@@ -433,8 +436,14 @@ Status GpuRenderer::Impl::ensureTargets(uint32_t width, uint32_t height) {
   }
   vkDeviceWaitIdle(device);
   targets = Targets{};
-  const VkImageUsageFlags color_usage =
-      VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
+  const VkImageUsageFlags color_usage = kTargetUsage;
+  // Linear targets may be limited to smaller sizes than optimal ones: fall back to the copy path.
+  if (direct_readback) {
+    for (VkFormat f : {kColorFormat, kLinearDepthFormat, kNormalFormat}) {
+      if (!ctx->linearImageSupported(f, kTargetUsage, width, height)) direct_readback = false;
+    }
+    if (!direct_readback) VKLOC_TRY_STATUS(createRenderPasses());
+  }
   bool linear = direct_readback;
   auto mk = [&](engine::Image& dst, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect) -> Status {
     auto img = ctx->createImage(width, height, format, usage, aspect, linear);
