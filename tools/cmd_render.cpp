@@ -2,7 +2,6 @@
 #include <fmt/format.h>
 
 #include <cstdio>
-#include <sstream>
 
 #include "common.hpp"
 #include "vkloc/demo.hpp"
@@ -25,15 +24,7 @@ struct RenderArgs {
 };
 
 Pose parseLookAt(const std::string& text) {
-  std::string s = text;
-  for (char& c : s) {
-    if (c == ',') c = ' ';
-  }
-  double v[6];
-  std::istringstream in(s);
-  for (double& x : v) {
-    if (!(in >> x)) throw Failure{fmt::format("--look-at '{}': expected ex,ey,ez,tx,ty,tz", text)};
-  }
+  const std::vector<double> v = take(parseNumbers(text, "--look-at (ex,ey,ez,tx,ty,tz)", 6));
   return take(lookAt({v[0], v[1], v[2]}, {v[3], v[4], v[5]}));
 }
 

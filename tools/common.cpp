@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <sstream>
 
 #include "vkloc/demo.hpp"
 #include "vkloc/image.hpp"
@@ -55,17 +54,7 @@ PinholeCamera CameraArgs::get() const {
   if (!file.empty()) return take(loadCamera(file));
   PinholeCamera cam;
   if (!intrinsics.empty()) {
-    std::string s = intrinsics;
-    for (char& ch : s) {
-      if (ch == ',') ch = ' ';
-    }
-    std::istringstream in(s);
-    double v[6];
-    for (double& x : v) {
-      if (!(in >> x)) throw Failure{fmt::format("--intrinsics '{}': expected fx,fy,cx,cy,width,height", intrinsics)};
-    }
-    std::string extra;
-    if (in >> extra) throw Failure{fmt::format("--intrinsics '{}': expected exactly 6 numbers", intrinsics)};
+    const std::vector<double> v = take(parseNumbers(intrinsics, "--intrinsics (fx,fy,cx,cy,width,height)", 6));
     for (int k = 4; k < 6; ++k) {
       if (!(v[k] >= 1 && v[k] <= 16384) || v[k] != std::floor(v[k])) {
         throw Failure{fmt::format("--intrinsics: image {} must be a whole number of pixels in 1..16384, got {}",

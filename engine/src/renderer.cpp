@@ -507,7 +507,7 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
   const Pose T_camera_world = T_world_camera.inverse();
   const double pixels_per_metre = engine::lodPixelsPerMetre(camera);
   for (const engine::LodBlock& b : lod.blocks) {
-    if (!aabbInFrustum(b.bounds, camera, T_world_camera, settings.near_m, settings.far_m)) continue;
+    if (!aabbInFrustumFromCamera(b.bounds, camera, T_camera_world, settings.near_m, settings.far_m)) continue;
     const int level_index = settings.lod_pixel_error > 0
                                 ? engine::selectLodLevel(b, engine::minDepthOfBox(b.bounds, T_camera_world),
                                                          pixels_per_metre, settings.lod_pixel_error)
@@ -530,7 +530,7 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
   Eigen::Matrix4d T_world_origin = Eigen::Matrix4d::Identity();
   T_world_origin.block<3, 1>(0, 3) = Eigen::Vector3d(origin[0], origin[1], origin[2]);
   const Eigen::Matrix4d clip =
-      projectionMatrix(camera, settings.near_m, settings.far_m) * T_world_camera.inverse().matrix() * T_world_origin;
+      projectionMatrix(camera, settings.near_m, settings.far_m) * T_camera_world.matrix() * T_world_origin;
   engine::ModelPush push{};
   for (int c = 0; c < 4; ++c) {
     for (int r = 0; r < 4; ++r) push.clip_from_origin[c * 4 + r] = static_cast<float>(clip(r, c));

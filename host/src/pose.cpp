@@ -44,7 +44,7 @@ bool isValidPose(const Pose& T) {
   return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-6 && R.determinant() > 0;
 }
 
-Result<Pose> parsePose(const std::string& text) {
+Result<std::vector<double>> parseNumbers(const std::string& text, const std::string& what, size_t expected) {
   std::string cleaned = text;
   for (char& ch : cleaned) {
     if (ch == ',' || ch == ';' || ch == '[' || ch == ']') ch = ' ';
@@ -56,11 +56,22 @@ Result<Pose> parsePose(const std::string& text) {
     char* end = nullptr;
     const double d = std::strtod(token.c_str(), &end);
     if (end == token.c_str() || *end != '\0') {
-      return makeError(ErrorCode::kInvalidArgument, fmt::format("pose: '{}' is not a number", token));
+      return makeError(ErrorCode::kInvalidArgument, fmt::format("{}: '{}' is not a number", what, token));
     }
-    if (!std::isfinite(d)) return makeError(ErrorCode::kInvalidArgument, "pose: non-finite value");
+    if (!std::isfinite(d)) return makeError(ErrorCode::kInvalidArgument, fmt::format("{}: non-finite value", what));
     v.push_back(d);
   }
+  if (expected > 0 && v.size() != expected) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("{}: expected {} numbers, got {}", what, expected, v.size()));
+  }
+  return v;
+}
+
+Result<Pose> parsePose(const std::string& text) {
+  auto numbers = parseNumbers(text, "pose");
+  if (!numbers.ok()) return numbers.error();
+  const std::vector<double>& v = *numbers;
   Pose T = Pose::Identity();
   if (v.size() == 7) {
     Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);

@@ -397,7 +397,7 @@ Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& ca
 
   if (!model.blocks.empty()) {
     for (const Block& block : model.blocks) {
-      if (!aabbInFrustum(block.bounds, camera, T_world_camera, settings.near_m, settings.far_m)) {
+      if (!aabbInFrustumFromCamera(block.bounds, camera, T_camera_world, settings.near_m, settings.far_m)) {
         continue;
       }
       ++out.blocks_drawn;

@@ -46,6 +46,11 @@ Eigen::Matrix4d projectionMatrix(const PinholeCamera& camera, double near_m, dou
 
 bool aabbInFrustum(const Aabb& box, const PinholeCamera& camera, const Pose& T_world_camera, double near_m,
                    double far_m) {
+  return aabbInFrustumFromCamera(box, camera, T_world_camera.inverse(), near_m, far_m);
+}
+
+bool aabbInFrustumFromCamera(const Aabb& box, const PinholeCamera& camera, const Pose& T_camera_world, double near_m,
+                             double far_m) {
   if (box.empty()) return false;
   // Frustum planes in the camera frame as n . p >= d (inside), then tested against the box's
   // eight corners transformed into the camera frame.
@@ -58,7 +63,6 @@ bool aabbInFrustum(const Aabb& box, const PinholeCamera& camera, const Pose& T_w
   const double yb = (h - 0.5 - camera.cy) / camera.fy;
   const Eigen::Vector3d normals[6] = {{1, 0, -xl}, {-1, 0, xr}, {0, 1, -yt}, {0, -1, yb}, {0, 0, 1}, {0, 0, -1}};
   const double offsets[6] = {0, 0, 0, 0, near_m, -far_m};
-  const Pose T_camera_world = T_world_camera.inverse();
   Eigen::Vector3d corners[8];
   for (int i = 0; i < 8; ++i) {
     const Eigen::Vector3d p_world((i & 1) ? box.max[0] : box.min[0], (i & 2) ? box.max[1] : box.min[1],

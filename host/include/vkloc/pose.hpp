@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <string>
+#include <vector>
 
 #include "vkloc/status.hpp"
 
@@ -19,6 +20,11 @@ using Pose = Eigen::Isometry3d;
 /// zero or any value is non-finite.
 Result<Pose> lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target,
                     const Eigen::Vector3d& up_world = Eigen::Vector3d::UnitZ());
+
+/// Parses a list of finite numbers separated by spaces, commas or semicolons (brackets are
+/// ignored), e.g. "1, 2.5 3". kInvalidArgument naming `what` and the bad token otherwise; when
+/// `expected` > 0, also when the count differs.
+Result<std::vector<double>> parseNumbers(const std::string& text, const std::string& what, size_t expected = 0);
 
 /// Parses a pose from text: "tx ty tz qx qy qz qw" (TUM order, T_world_camera) or 16 numbers
 /// (row-major 4x4). Commas and spaces both separate. Rejects non-finite values and a

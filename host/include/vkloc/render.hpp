@@ -65,6 +65,10 @@ Eigen::Matrix4d projectionMatrix(const PinholeCamera& camera, double near_m, dou
 bool aabbInFrustum(const Aabb& box, const PinholeCamera& camera, const Pose& T_world_camera, double near_m,
                    double far_m);
 
+/// The same test with the inverse pose already computed (per-block loops invert once).
+bool aabbInFrustumFromCamera(const Aabb& box, const PinholeCamera& camera, const Pose& T_camera_world, double near_m,
+                             double far_m);
+
 /// CPU reference renderer: scanline rasterizer with the same conventions as the GPU renderer
 /// (pixel-centre sampling, top-left fill rule, perspective-correct attributes, bilinear
 /// repeat texture sampling, nearest depth wins). Slow; meant as a test oracle.
