@@ -132,7 +132,7 @@ void run(const BenchArgs& a) {
 
 }  // namespace
 
-void addBenchVerb(CLI::App& app) {
+static void addBenchVerb(CLI::App& app) {
   CLI::App* bench = app.add_subcommand("bench", "Benchmarks (median of many runs)");
   bench->require_subcommand(1);
   auto args = std::make_shared<BenchArgs>();
@@ -159,5 +159,7 @@ void addBenchVerb(CLI::App& app) {
       ->capture_default_str();
   render->callback([args] { run(*args); });
 }
+
+VKLOC_REGISTER_VERB(90, addBenchVerb);
 
 }  // namespace vkloc::cli

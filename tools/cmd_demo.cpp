@@ -57,7 +57,7 @@ void run(const DemoArgs& a) {
 
 }  // namespace
 
-void addDemoVerb(CLI::App& app) {
+static void addDemoVerb(CLI::App& app) {
   auto args = std::make_shared<DemoArgs>();
   CLI::App* cmd = app.add_subcommand("demo", "Render the built-in city and room models and report timings");
   cmd->add_option("--out,-o", args->out_dir, "Output directory")->capture_default_str();
@@ -65,5 +65,7 @@ void addDemoVerb(CLI::App& app) {
   args->camera.add(*cmd);
   cmd->callback([args] { run(*args); });
 }
+
+VKLOC_REGISTER_VERB(10, addDemoVerb);
 
 }  // namespace vkloc::cli

@@ -5,7 +5,7 @@
 
 namespace vkloc::cli {
 
-void addDevicesVerb(CLI::App& app) {
+static void addDevicesVerb(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("devices", "List Vulkan devices (select one with --device or VKLOC_DEVICE)");
   cmd->callback([] {
     const auto devices = take(GpuContext::listDevices());
@@ -20,5 +20,7 @@ void addDevicesVerb(CLI::App& app) {
     if (!chosen.ok()) throw Failure{chosen.error().message};
   });
 }
+
+VKLOC_REGISTER_VERB(80, addDevicesVerb);
 
 }  // namespace vkloc::cli

@@ -6,7 +6,7 @@
 
 namespace vkloc::cli {
 
-void addExportVerb(CLI::App& app) {
+static void addExportVerb(CLI::App& app) {
   struct Args {
     ModelArgs model;
     std::string out;
@@ -28,5 +28,7 @@ void addExportVerb(CLI::App& app) {
     std::printf("wrote %s: %zu triangles, %zu textures\n", args->out.c_str(), m.triangleCount(), m.textures.size());
   });
 }
+
+VKLOC_REGISTER_VERB(75, addExportVerb);
 
 }  // namespace vkloc::cli

@@ -6,7 +6,7 @@
 
 namespace vkloc::cli {
 
-void addInfoVerb(CLI::App& app) {
+static void addInfoVerb(CLI::App& app) {
   auto args = std::make_shared<ModelArgs>();
   auto list_blocks = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand("info", "Print a model's triangles, textures, bounds and blocks");
@@ -52,5 +52,7 @@ void addInfoVerb(CLI::App& app) {
     }
   });
 }
+
+VKLOC_REGISTER_VERB(70, addInfoVerb);
 
 }  // namespace vkloc::cli

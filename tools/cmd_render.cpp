@@ -63,7 +63,7 @@ void run(const RenderArgs& a) {
 
 }  // namespace
 
-void addRenderVerb(CLI::App& app) {
+static void addRenderVerb(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   CLI::App* cmd = app.add_subcommand("render", "Render a model at camera poses; write colour, gray, depth, normals");
   args->model.add(*cmd);
@@ -79,5 +79,7 @@ void addRenderVerb(CLI::App& app) {
   cmd->add_flag("--reference", args->reference, "Use the CPU reference rasterizer instead of Vulkan");
   cmd->callback([args] { run(*args); });
 }
+
+VKLOC_REGISTER_VERB(40, addRenderVerb);
 
 }  // namespace vkloc::cli

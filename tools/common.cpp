@@ -102,4 +102,9 @@ std::vector<std::string> writeRender(const std::string& dir, const std::string& 
   return paths;
 }
 
+std::vector<Verb>& verbRegistry() {
+  static std::vector<Verb> verbs;
+  return verbs;
+}
+
 }  // namespace vkloc::cli

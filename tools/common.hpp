@@ -67,11 +67,19 @@ inline double msSince(std::chrono::steady_clock::time_point t0) {
 /// named with `stem` in `dir`. Returns the paths written.
 std::vector<std::string> writeRender(const std::string& dir, const std::string& stem, const RenderOutput& out);
 
-void addRenderVerb(CLI::App& app);
-void addInfoVerb(CLI::App& app);
-void addDevicesVerb(CLI::App& app);
-void addBenchVerb(CLI::App& app);
-void addDemoVerb(CLI::App& app);
-void addExportVerb(CLI::App& app);
+/// A verb of the command line: `add` creates its subcommand on the app. Each tools/cmd_*.cpp
+/// registers its verbs with VKLOC_REGISTER_VERB; main() adds them ordered by `order`, so adding a
+/// verb is adding a file.
+struct Verb {
+  int order = 0;  ///< Position in `vkloc --help` (lower first).
+  void (*add)(CLI::App& app) = nullptr;
+};
+/// Every registered verb (filled by static registration before main runs).
+std::vector<Verb>& verbRegistry();
+struct VerbRegistration {
+  VerbRegistration(int order, void (*add)(CLI::App& app)) { verbRegistry().push_back(Verb{order, add}); }
+};
+#define VKLOC_REGISTER_VERB(order, add_function) \
+  static const ::vkloc::cli::VerbRegistration vkloc_verb_registration_##add_function { order, add_function }
 
 }  // namespace vkloc::cli

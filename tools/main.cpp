@@ -1,4 +1,5 @@
 // vkloc: command-line entry point. One verb per file in tools/.
+#include <algorithm>
 #include <cstdio>
 #include <opencv2/core/utils/logger.hpp>
 
@@ -17,12 +18,9 @@ int main(int argc, char** argv) {
   CLI::App app{"vkloc: model-based camera localization with Vulkan"};
   app.require_subcommand(1);
   app.set_help_all_flag("--help-all", "Help for every command");
-  vkloc::cli::addDemoVerb(app);
-  vkloc::cli::addRenderVerb(app);
-  vkloc::cli::addInfoVerb(app);
-  vkloc::cli::addDevicesVerb(app);
-  vkloc::cli::addBenchVerb(app);
-  vkloc::cli::addExportVerb(app);
+  auto verbs = vkloc::cli::verbRegistry();
+  std::stable_sort(verbs.begin(), verbs.end(), [](const auto& a, const auto& b) { return a.order < b.order; });
+  for (const auto& verb : verbs) verb.add(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
