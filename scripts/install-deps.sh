@@ -14,8 +14,10 @@ PACKAGES=(
   libglm-dev libeigen3-dev libopencv-dev libassimp-dev libdraco-dev libmeshoptimizer-dev libyaml-cpp-dev
   # command line, config, logging
   libcli11-dev nlohmann-json3-dev libfmt-dev
-  # tests and benchmarks
-  libgtest-dev libgmock-dev libbenchmark-dev
+  # tests and benchmarks; a peer's data set with ground truth (ViSP Castle-simu)
+  libgtest-dev libgmock-dev libbenchmark-dev visp-images-data
+  # evaluation reports: plotting library inlined into the HTML
+  libjs-chart.js
 )
 
 if [ "$(id -u)" -ne 0 ]; then

@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "model_internal.hpp"
+#include "vkloc/visp.hpp"
 
 namespace vkloc {
 namespace model_detail {
@@ -412,6 +413,7 @@ Result<Model> loadChecked(const std::string& path, const ModelLoadOptions& optio
     if (ext == ".obj" || ext == ".ply") return model_detail::loadWithAssimp(path, ext, warnings);
     if (ext == ".gltf" || ext == ".glb") return model_detail::loadGltf(path, warnings);
     if (ext == ".drc") return model_detail::loadDrc(path);
+    if (ext == ".cao") return loadCaoModel(path, &warnings);
     if (!ext.empty() && model_detail::assimpReadsExtension(ext)) {
       return model_detail::loadWithAssimp(path, ext, warnings);
     }
@@ -420,7 +422,8 @@ Result<Model> loadChecked(const std::string& path, const ModelLoadOptions& optio
         ext.empty()
             ? std::string("unknown model format (no file extension)")
             : fmt::format(
-                  "unknown model format '{}' (use .obj, .ply, .gltf, .glb, .drc or another format assimp reads)", ext));
+                  "unknown model format '{}' (use .obj, .ply, .gltf, .glb, .drc, .cao or another format assimp reads)",
+                  ext));
   }();
   if (!loaded.ok()) return loaded.error();
 

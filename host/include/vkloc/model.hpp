@@ -92,7 +92,8 @@ struct ModelLoadOptions {
 /// Loads a mesh model. Formats, chosen by extension (case-insensitive) and checked by content:
 ///  - .obj (+ .mtl, textures), .ply (vertex colours), .gltf / .glb (embedded or external
 ///    textures), and what else assimp reads;
-///  - .drc (Draco) and glTF/GLB primitives using KHR_draco_mesh_compression.
+///  - .drc (Draco) and glTF/GLB primitives using KHR_draco_mesh_compression;
+///  - .cao (ViSP CAD models, untextured; see visp.hpp).
 /// Returns kNotFound for a missing file, kMalformedInput for truncated or garbage bytes, empty
 /// meshes, NaN/inf vertices or out-of-range indices, kUnsupported for unknown formats; every
 /// message names the file. A missing texture is a warning (see `warnings`), not an error: the

@@ -1,0 +1,149 @@
+// vkloc: image sequences with ground truth, IMU and position priors.
+//
+// A sequence is a folder:
+//   sequence.yaml     name, model file, T_world_model, unit_scale, initial pose, IMU noise, gravity
+//   camera.yaml       camera model, intrinsics, distortion, resolution, T_body_camera
+//   images.txt        TUM rgb.txt style: "timestamp_s path" per line, '#' comments
+//   groundtruth.txt   TUM trajectory "t tx ty tz qx qy qz qw" of T_world_camera (optional)
+//   imu.csv           EuRoC style "t_ns,wx,wy,wz,ax,ay,az", body frame (optional)
+//   prior.csv         "t_ns,x,y,z,sigma_x,sigma_y,sigma_z": p_world_body with 1-sigma (optional)
+// Timestamps are int64 nanoseconds in memory; text files with seconds keep 9 decimals so that a
+// write/read round trip is exact. Every loader rejects malformed lines with a one-line error
+// "file:line: what is wrong", non-finite numbers and timestamps that do not increase.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vkloc/camera.hpp"
+#include "vkloc/pose.hpp"
+#include "vkloc/status.hpp"
+
+namespace vkloc {
+
+/// Camera of a sequence: projection model, intrinsics, distortion and mounting on the body (IMU).
+struct SequenceCamera {
+  /// "pinhole" (supported); "mei" and "kannala_brandt" are reserved for fisheye lenses: they are
+  /// read and written with their parameters but loaders of images reject them for now.
+  std::string model = "pinhole";
+  PinholeCamera intrinsics;  ///< fx, fy, cx, cy (pixels), width, height.
+  /// Distortion coefficients: pinhole: radial-tangential k1 k2 p1 p2 [k3] (empty = none);
+  /// kannala_brandt: k1..k4; mei: k1 k2 p1 p2.
+  std::vector<double> distortion;
+  double xi = 0.0;                        ///< Mei unified model's mirror parameter (mei only).
+  Pose T_body_camera = Pose::Identity();  ///< Camera frame into body (IMU) frame, metres.
+};
+
+/// One camera image: time and file path (relative to the sequence folder, or absolute).
+struct ImageEntry {
+  int64_t t_ns = 0;
+  std::string path;
+};
+
+/// A timestamped camera pose T_world_camera (TUM trajectory line).
+struct StampedPose {
+  int64_t t_ns = 0;
+  Pose T_world_camera = Pose::Identity();
+};
+
+/// One IMU reading in the body frame.
+struct ImuSample {
+  int64_t t_ns = 0;
+  Eigen::Vector3d gyro_body = Eigen::Vector3d::Zero();   ///< Angular rate, rad/s.
+  Eigen::Vector3d accel_body = Eigen::Vector3d::Zero();  ///< Specific force R_body_world (a - g), m/s^2.
+};
+
+/// Continuous-time IMU noise model (Kalibr / EuRoC convention).
+struct ImuNoise {
+  double rate_hz = 200.0;               ///< Sample rate, Hz.
+  double gyro_noise_density = 1.7e-4;   ///< White noise, rad/s/sqrt(Hz).
+  double accel_noise_density = 2.0e-3;  ///< White noise, m/s^2/sqrt(Hz).
+  double gyro_random_walk = 1.9e-5;     ///< Bias random walk, rad/s^2/sqrt(Hz).
+  double accel_random_walk = 3.0e-3;    ///< Bias random walk, m/s^3/sqrt(Hz).
+};
+
+/// A GPS-like position prior of the body in the world frame.
+struct PositionPrior {
+  int64_t t_ns = 0;
+  Eigen::Vector3d p_world_body = Eigen::Vector3d::Zero();  ///< Metres.
+  Eigen::Vector3d sigma = Eigen::Vector3d::Ones();         ///< 1-sigma per axis, metres (> 0).
+};
+
+/// A whole sequence in memory. Image pixels are not loaded; see imagePath().
+struct Sequence {
+  std::string directory;  ///< Folder the sequence was loaded from (relative paths resolve here).
+  std::string name;
+  /// Model file (relative to `directory` or absolute), or a built-in model name ("city",
+  /// "room"); empty when the sequence has no model (e.g. an imported EuRoC folder).
+  std::string model;
+  Pose T_world_model = Pose::Identity();           ///< Applied to the model when loading it.
+  double unit_scale = 1.0;                         ///< Model units to metres.
+  std::optional<Pose> initial_T_world_camera;      ///< Pose at the first image when known.
+  Eigen::Vector3d gravity_world{0.0, 0.0, -9.81};  ///< m/s^2.
+  SequenceCamera camera;
+  std::vector<ImageEntry> images;
+  std::vector<StampedPose> groundtruth;  ///< Empty when not known.
+  std::vector<ImuSample> imu;            ///< Empty when no IMU.
+  std::optional<ImuNoise> imu_noise;     ///< Noise parameters of `imu` when known.
+  std::vector<PositionPrior> priors;     ///< Empty when no priors.
+
+  /// Path of image i resolved against `directory`. Precondition: i < images.size().
+  std::string imagePath(size_t i) const;
+  /// Model path resolved against `directory` (built-in names and "" are returned unchanged).
+  std::string modelPath() const;
+};
+
+/// Loads a sequence folder. kNotFound when the folder, sequence.yaml, camera.yaml or images.txt
+/// is missing; kMalformedInput ("file:line: ...") for bad content. Optional files may be absent.
+Result<Sequence> loadSequence(const std::string& directory);
+
+/// Writes sequence.yaml, camera.yaml, images.txt and, when non-empty, groundtruth.txt, imu.csv
+/// and prior.csv into `directory` (created if needed). Each file is written atomically
+/// (temporary + rename); an optional file left from an earlier save is removed when its data is
+/// now empty, so that loading gives back `sequence`. Image files are the caller's.
+/// kInvalidArgument (before anything is written) for non-finite values, invalid poses or camera,
+/// sigma <= 0, image paths with line breaks or surrounding spaces, or timestamps that do not
+/// increase.
+Status saveSequence(const Sequence& sequence, const std::string& directory);
+
+Result<SequenceCamera> loadSequenceCamera(const std::string& path);
+Status saveSequenceCamera(const SequenceCamera& camera, const std::string& path);
+
+/// TUM trajectory: "t tx ty tz qx qy qz qw" per line (t in seconds), '#' comments, blank lines
+/// ignored. Quaternions are normalised; |1 - |q|| > 1e-3 is rejected. Times must increase.
+Result<std::vector<StampedPose>> loadTumTrajectory(const std::string& path);
+Status saveTumTrajectory(const std::vector<StampedPose>& poses, const std::string& path);
+
+/// images.txt: "t_s path" per line (TUM rgb.txt).
+Result<std::vector<ImageEntry>> loadImageList(const std::string& path);
+Status saveImageList(const std::vector<ImageEntry>& images, const std::string& path);
+
+/// imu.csv (EuRoC: t_ns, w_RS_S_x/y/z rad/s, a_RS_S_x/y/z m/s^2; header line optional).
+Result<std::vector<ImuSample>> loadImuCsv(const std::string& path);
+Status saveImuCsv(const std::vector<ImuSample>& samples, const std::string& path);
+
+/// prior.csv: t_ns,x,y,z,sigma_x,sigma_y,sigma_z (metres; header line optional).
+Result<std::vector<PositionPrior>> loadPriorCsv(const std::string& path);
+Status savePriorCsv(const std::vector<PositionPrior>& priors, const std::string& path);
+
+/// Converts a TUM RGB-D folder (rgb.txt, groundtruth.txt, accelerometer.txt ignored) into a
+/// Sequence referencing the original images by absolute path. The camera is taken from
+/// `camera_override` when given, else from the folder name (freiburg1/2/3 calibrations).
+/// `model` is stored as given; `directory` is left empty (image paths are absolute).
+/// initial_T_world_camera is the ground truth interpolated at the first image when it brackets
+/// it. kNotFound when the folder or rgb.txt is missing. Does not write anything.
+Result<Sequence> importTumRgbd(const std::string& tum_directory, const std::optional<SequenceCamera>& camera_override,
+                               const std::string& model = "");
+
+/// Converts a EuRoC ASL folder (mav0/cam0 sensor.yaml + data.csv, mav0/imu0/data.csv,
+/// mav0/state_groundtruth_estimate0/data.csv when present) into a Sequence. Ground truth is
+/// converted from T_world_body to T_world_camera with the camera's T_body_camera (T_BS);
+/// mav0/imu0/sensor.yaml, when present, gives imu_noise. `euroc_directory` may also be the mav0
+/// folder itself. kNotFound when cam0/sensor.yaml or cam0/data.csv is missing; kUnsupported for
+/// camera models other than pinhole with radial-tangential or equidistant distortion.
+Result<Sequence> importEuroc(const std::string& euroc_directory, const std::string& model = "");
+
+}  // namespace vkloc
