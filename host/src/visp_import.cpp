@@ -452,7 +452,8 @@ struct CaoParser {
   }
 
   /// Open tube between a and b; triangles counter-clockwise seen from outside.
-  static void addCylinder(CaoModel& out, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double r) {
+  /// Points are taken by value: callers pass elements of out.points, which push_back moves.
+  static void addCylinder(CaoModel& out, const Eigen::Vector3d a, const Eigen::Vector3d b, double r) {
     const Eigen::Vector3d axis = b - a;
     if (axis.norm() <= 0.0) return;
     Eigen::Vector3d u, v;
@@ -473,7 +474,7 @@ struct CaoParser {
   }
 
   /// Disc of radius r around c in the plane through c, p1, p2. False when they are collinear.
-  static bool addCircle(CaoModel& out, const Eigen::Vector3d& c, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
+  static bool addCircle(CaoModel& out, const Eigen::Vector3d c, const Eigen::Vector3d p1, const Eigen::Vector3d p2,
                         double r) {
     const Eigen::Vector3d n = (p1 - c).cross(p2 - c);
     if (!(n.norm() > 1e-12)) return false;
