@@ -1,0 +1,762 @@
+// GpuEdgeStages: live-image edge stages and edge-alignment reductions as Vulkan compute passes.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <map>
+
+#include "context.hpp"
+#include "edge_layout.h"
+#include "shader_registry.hpp"
+#include "vkloc/gpu_edges.hpp"
+
+namespace vkloc {
+
+using engine::Buffer;
+using engine::DeviceHandle;
+using engine::EdgeControl;
+using engine::EdgePush;
+
+static_assert(sizeof(EdgePush) == 128, "EdgePush must match the GLSL std430 push block");
+static_assert(offsetof(EdgePush, rank) == 32);
+static_assert(offsetof(EdgePush, pose_row0) == 48);
+static_assert(offsetof(EdgePush, intrinsics) == 96);
+static_assert(offsetof(EdgePush, robust) == 112);
+static_assert(offsetof(EdgeControl, candidate_count) == 20);
+static_assert(offsetof(EdgeControl, changes) == 32);
+static_assert(sizeof(EdgeControl) == 32 + 4 * EDGE_MAX_HYSTERESIS_PASSES);
+static_assert(sizeof(EdgePoint) == 16);
+
+namespace {
+
+constexpr uint32_t kGridGroups = 16;      // workgroups of grid-stride dispatches
+constexpr int kHysteresisBatch = 6;       // hysteresis passes per submission
+constexpr uint32_t kMaxTimestamps = 512;  // per submission
+
+enum Kernel : int {
+  kConvert,
+  kPyramid,
+  kSobel,
+  kHist,
+  kSelect,
+  kNms,
+  kHysteresis,
+  kJfaInit,
+  kJfaStep,
+  kDistance,
+  kDistanceGradient,
+  kResiduals,
+  kNormalEquations,
+  kKernelCount
+};
+
+struct KernelSpec {
+  const char* shader;
+  int mode;  // specialization constant 0 (reduce_edges.comp only), -1 = none
+};
+constexpr KernelSpec kKernels[kKernelCount] = {
+    {"edge_convert.comp", -1}, {"pyramid_down.comp", -1},  {"edge_sobel.comp", -1},      {"edge_hist.comp", -1},
+    {"edge_select.comp", -1},  {"edge_nms.comp", -1},      {"edge_hysteresis.comp", -1}, {"jfa_init.comp", -1},
+    {"jfa_step.comp", -1},     {"edge_distance.comp", -1}, {"edge_dgrad.comp", -1},      {"reduce_edges.comp", 0},
+    {"reduce_edges.comp", 1}};
+
+uint32_t groups(int n, int local) { return static_cast<uint32_t>((n + local - 1) / local); }
+
+void computeBarrier(VkCommandBuffer cmd) {
+  VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  mb.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &mb, 0, nullptr, 0, nullptr);
+}
+
+void hostBarrier(VkCommandBuffer cmd) {
+  VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                       VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr, 0, nullptr);
+}
+
+uint32_t nextPowerOfTwo(double v) {
+  uint32_t p = 1;
+  while (p < v && p < (1u << 15)) p <<= 1;
+  return p;
+}
+
+}  // namespace
+
+struct GpuEdgeStages::Impl {
+  std::shared_ptr<GpuContext> context;
+  GpuContext::Impl* ctx = nullptr;
+  VkDevice device = VK_NULL_HANDLE;
+  PinholeCamera camera;
+  LiveFrameOptions options;
+
+  struct Level {
+    PinholeCamera camera;
+    engine::Image gray, mag, grad, state, seed_a, seed_b, distance, dgrad;
+    Buffer hist, control, candidates;
+    VkDescriptorSet set = VK_NULL_HANDLE;
+    bool seeds_in_b = false;  // where the final jump-flooding seeds are
+    int hysteresis_passes = 0;
+  };
+  std::vector<Level> levels;
+  Buffer input8;
+  Buffer points, residuals, partials;
+  uint32_t point_count = 0;
+  uint32_t point_capacity = 0;
+  bool have_frame = false;
+
+  DeviceHandle<VkDescriptorSetLayout> set_layout;
+  DeviceHandle<VkDescriptorPool> descriptor_pool;
+  DeviceHandle<VkPipelineLayout> pipeline_layout;
+  std::array<DeviceHandle<VkShaderModule>, kKernelCount> modules;
+  std::array<DeviceHandle<VkPipeline>, kKernelCount> pipelines;
+  DeviceHandle<VkFence> fence;
+  DeviceHandle<VkQueryPool> query_pool;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  double timestamp_ns = 0;  // ns per tick; 0 = no timestamps
+  uint64_t timestamp_mask = ~0ull;
+
+  // Timing of the current submission: query index -> stage whose end it marks.
+  std::vector<std::string> marks;
+  std::vector<GpuStageTiming> timings;
+
+  ~Impl() {
+    if (cmd != VK_NULL_HANDLE) vkFreeCommandBuffers(device, ctx->command_pool.get(), 1, &cmd);
+  }
+
+  Status init();
+  Result<engine::Image> storageImage(int w, int h, VkFormat format);
+  Status updatePointBindings();
+
+  Status begin();
+  Status submit();
+  void mark(const char* stage);
+  void dispatch(Kernel k, int level, const EdgePush& push, uint32_t gx, uint32_t gy = 1);
+  EdgePush levelPush(int level) const;
+  void recordFront(int level);
+  void recordHysteresis(int level, int passes);
+  void recordDistance(int level);
+  Status checkTracking(const Pose& T_camera_ref, int level) const;
+  EdgePush trackingPush(const Pose& T_camera_ref, int level) const;
+};
+
+Result<engine::Image> GpuEdgeStages::Impl::storageImage(int w, int h, VkFormat format) {
+  return ctx->createImage(static_cast<uint32_t>(w), static_cast<uint32_t>(h), format,
+                          VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+}
+
+Status GpuEdgeStages::Impl::init() {
+  device = ctx->device;
+  for (VkFormat f : {VK_FORMAT_R32_SFLOAT, VK_FORMAT_R32G32_SFLOAT, VK_FORMAT_R32_UINT}) {
+    VkFormatProperties p{};
+    vkGetPhysicalDeviceFormatProperties(ctx->physical, f, &p);
+    if (!(p.optimalTilingFeatures & VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT)) {
+      return makeError(ErrorCode::kGpuError,
+                       fmt::format("edge stages: device cannot use format {} as a storage image", static_cast<int>(f)));
+    }
+  }
+  VkFormatProperties ui{};
+  vkGetPhysicalDeviceFormatProperties(ctx->physical, VK_FORMAT_R32_UINT, &ui);
+  if (!(ui.optimalTilingFeatures & VK_FORMAT_FEATURE_STORAGE_IMAGE_ATOMIC_BIT)) {
+    return makeError(ErrorCode::kGpuError, "edge stages: device has no r32ui storage-image atomics");
+  }
+  VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+  VkPhysicalDeviceProperties2 props2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+  props2.pNext = &subgroup;
+  vkGetPhysicalDeviceProperties2(ctx->physical, &props2);
+  const VkSubgroupFeatureFlags need =
+      VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
+  if ((subgroup.supportedOperations & need) != need || !(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT)) {
+    return makeError(ErrorCode::kGpuError, "edge stages: device lacks subgroup basic/arithmetic/ballot in compute");
+  }
+
+  // Levels as buildLiveFrame: level k > 0 only while level k - 1 is at least 16x16.
+  int w = camera.width, h = camera.height;
+  for (int k = 0; k < options.levels; ++k) {
+    if (k > 0) {
+      if (w < 16 || h < 16) break;
+      w = (w + 1) / 2;
+      h = (h + 1) / 2;
+    }
+    Level level;
+    level.camera = pyramidCamera(camera, k);
+    for (auto [image, format] : {std::pair{&level.gray, VK_FORMAT_R32_SFLOAT},
+                                 {&level.mag, VK_FORMAT_R32_SFLOAT},
+                                 {&level.grad, VK_FORMAT_R32G32_SFLOAT},
+                                 {&level.state, VK_FORMAT_R32_UINT},
+                                 {&level.seed_a, VK_FORMAT_R32_UINT},
+                                 {&level.seed_b, VK_FORMAT_R32_UINT},
+                                 {&level.distance, VK_FORMAT_R32_SFLOAT},
+                                 {&level.dgrad, VK_FORMAT_R32G32_SFLOAT}}) {
+      auto img = storageImage(w, h, format);
+      if (!img.ok()) return img.error();
+      *image = std::move(*img);
+    }
+    const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    auto hist = ctx->createBuffer(EDGE_HIST_BINS * 4, ssbo, false);
+    if (!hist.ok()) return hist.error();
+    level.hist = std::move(*hist);
+    auto control = ctx->createBuffer(sizeof(EdgeControl), ssbo, true);
+    if (!control.ok()) return control.error();
+    level.control = std::move(*control);
+    auto candidates = ctx->createBuffer(static_cast<VkDeviceSize>(w) * h * 4, ssbo, false);
+    if (!candidates.ok()) return candidates.error();
+    level.candidates = std::move(*candidates);
+    levels.push_back(std::move(level));
+  }
+  auto input = ctx->createBuffer((static_cast<VkDeviceSize>(camera.width) * camera.height + 3) / 4 * 4,
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false);
+  if (!input.ok()) return input.error();
+  input8 = std::move(*input);
+  auto partial = ctx->createBuffer(kGridGroups * EDGE_REDUCE_VEC4S * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
+  if (!partial.ok()) return partial.error();
+  partials = std::move(*partial);
+
+  // One descriptor layout for every kernel; one set per level.
+  std::vector<VkDescriptorSetLayoutBinding> bindings(EDGE_BINDING_COUNT);
+  for (uint32_t b = 0; b < EDGE_BINDING_COUNT; ++b) {
+    bindings[b].binding = b;
+    const bool image = b >= EDGE_BINDING_GRAY_PREV && b <= EDGE_BINDING_DGRAD;
+    bindings[b].descriptorType = image ? VK_DESCRIPTOR_TYPE_STORAGE_IMAGE : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    bindings[b].descriptorCount = 1;
+    bindings[b].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
+  }
+  VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  lci.bindingCount = EDGE_BINDING_COUNT;
+  lci.pBindings = bindings.data();
+  VkDescriptorSetLayout layout = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateDescriptorSetLayout(device, &lci, nullptr, &layout));
+  set_layout = DeviceHandle<VkDescriptorSetLayout>(device, layout, vkDestroyDescriptorSetLayout);
+  const uint32_t n_sets = static_cast<uint32_t>(levels.size());
+  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 9 * n_sets},
+                                   {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7 * n_sets}};
+  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  dpci.maxSets = n_sets;
+  dpci.poolSizeCount = 2;
+  dpci.pPoolSizes = sizes;
+  VkDescriptorPool pool = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateDescriptorPool(device, &dpci, nullptr, &pool));
+  descriptor_pool = DeviceHandle<VkDescriptorPool>(device, pool, vkDestroyDescriptorPool);
+  for (size_t k = 0; k < levels.size(); ++k) {
+    Level& L = levels[k];
+    VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    ai.descriptorPool = pool;
+    ai.descriptorSetCount = 1;
+    ai.pSetLayouts = &layout;
+    VKLOC_VK(vkAllocateDescriptorSets(device, &ai, &L.set));
+    const engine::Image* images[9] = {k > 0 ? &levels[k - 1].gray : &L.gray,
+                                      &L.gray,
+                                      &L.mag,
+                                      &L.grad,
+                                      &L.state,
+                                      &L.seed_a,
+                                      &L.seed_b,
+                                      &L.distance,
+                                      &L.dgrad};
+    VkDescriptorImageInfo image_infos[9];
+    VkWriteDescriptorSet writes[13];
+    for (int i = 0; i < 9; ++i) {
+      image_infos[i] = {VK_NULL_HANDLE, images[i]->view.get(), VK_IMAGE_LAYOUT_GENERAL};
+      writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+      writes[i].dstSet = L.set;
+      writes[i].dstBinding = EDGE_BINDING_GRAY_PREV + i;
+      writes[i].descriptorCount = 1;
+      writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+      writes[i].pImageInfo = &image_infos[i];
+    }
+    const Buffer* buffers[4] = {&input8, &L.hist, &L.control, &L.candidates};
+    const uint32_t buffer_bindings[4] = {EDGE_BINDING_INPUT8, EDGE_BINDING_HIST, EDGE_BINDING_CONTROL,
+                                         EDGE_BINDING_CANDIDATES};
+    VkDescriptorBufferInfo buffer_infos[4];
+    for (int i = 0; i < 4; ++i) {
+      buffer_infos[i] = {buffers[i]->buffer.get(), 0, VK_WHOLE_SIZE};
+      writes[9 + i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+      writes[9 + i].dstSet = L.set;
+      writes[9 + i].dstBinding = buffer_bindings[i];
+      writes[9 + i].descriptorCount = 1;
+      writes[9 + i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      writes[9 + i].pBufferInfo = &buffer_infos[i];
+    }
+    vkUpdateDescriptorSets(device, 13, writes, 0, nullptr);
+  }
+  VKLOC_TRY_STATUS(updatePointBindings());
+
+  VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(EdgePush)};
+  VkPipelineLayoutCreateInfo plci{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  plci.setLayoutCount = 1;
+  plci.pSetLayouts = &layout;
+  plci.pushConstantRangeCount = 1;
+  plci.pPushConstantRanges = &range;
+  VkPipelineLayout pl = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreatePipelineLayout(device, &plci, nullptr, &pl));
+  pipeline_layout = DeviceHandle<VkPipelineLayout>(device, pl, vkDestroyPipelineLayout);
+  for (int k = 0; k < kKernelCount; ++k) {
+    const engine::ShaderBlob* blob = engine::findShader(kKernels[k].shader);
+    if (blob == nullptr) {
+      return makeError(ErrorCode::kGpuError, fmt::format("shader {} is not embedded", kKernels[k].shader));
+    }
+    VkShaderModuleCreateInfo smci{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    smci.codeSize = blob->word_count * 4;
+    smci.pCode = blob->words;
+    VkShaderModule module = VK_NULL_HANDLE;
+    VKLOC_VK(vkCreateShaderModule(device, &smci, nullptr, &module));
+    modules[k] = DeviceHandle<VkShaderModule>(device, module, vkDestroyShaderModule);
+    const int32_t mode = kKernels[k].mode;
+    VkSpecializationMapEntry entry{0, 0, sizeof(int32_t)};
+    VkSpecializationInfo spec{1, &entry, sizeof(int32_t), &mode};
+    VkComputePipelineCreateInfo cpci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    cpci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+    cpci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    cpci.stage.module = module;
+    cpci.stage.pName = "main";
+    cpci.stage.pSpecializationInfo = mode >= 0 ? &spec : nullptr;
+    cpci.layout = pl;
+    VkPipeline pipe = VK_NULL_HANDLE;
+    VKLOC_VK(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipe));
+    pipelines[k] = DeviceHandle<VkPipeline>(device, pipe, vkDestroyPipeline);
+  }
+
+  VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  VkFence f = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateFence(device, &fci, nullptr, &f));
+  fence = DeviceHandle<VkFence>(device, f, vkDestroyFence);
+  auto command = ctx->allocateCommandBuffer();
+  if (!command.ok()) return command.error();
+  cmd = *command;
+
+  // Timestamps where the queue supports them.
+  uint32_t qcount = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(ctx->physical, &qcount, nullptr);
+  std::vector<VkQueueFamilyProperties> families(qcount);
+  vkGetPhysicalDeviceQueueFamilyProperties(ctx->physical, &qcount, families.data());
+  const uint32_t valid_bits = families[ctx->queue_family].timestampValidBits;
+  if (valid_bits > 0 && ctx->properties.limits.timestampComputeAndGraphics) {
+    VkQueryPoolCreateInfo qpci{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+    qpci.queryType = VK_QUERY_TYPE_TIMESTAMP;
+    qpci.queryCount = kMaxTimestamps;
+    VkQueryPool qp = VK_NULL_HANDLE;
+    VKLOC_VK(vkCreateQueryPool(device, &qpci, nullptr, &qp));
+    query_pool = DeviceHandle<VkQueryPool>(device, qp, vkDestroyQueryPool);
+    timestamp_ns = ctx->properties.limits.timestampPeriod;
+    timestamp_mask = valid_bits >= 64 ? ~0ull : ((1ull << valid_bits) - 1);
+  }
+
+  // Every image lives in GENERAL.
+  return ctx->runOnce([&](VkCommandBuffer c) {
+    std::vector<VkImageMemoryBarrier> barriers;
+    for (Level& L : levels) {
+      for (engine::Image* image : {&L.gray, &L.mag, &L.grad, &L.state, &L.seed_a, &L.seed_b, &L.distance, &L.dgrad}) {
+        VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+        b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+        b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+        b.newLayout = VK_IMAGE_LAYOUT_GENERAL;
+        b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+        b.image = image->image.get();
+        b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+        barriers.push_back(b);
+      }
+    }
+    vkCmdPipelineBarrier(c, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 0, nullptr, 0,
+                         nullptr, static_cast<uint32_t>(barriers.size()), barriers.data());
+  });
+}
+
+Status GpuEdgeStages::Impl::updatePointBindings() {
+  const uint32_t capacity = std::max<uint32_t>(point_count, 256);
+  if (capacity > point_capacity || !points.buffer) {
+    const uint32_t grown = std::max(capacity, point_capacity * 2);
+    auto p = ctx->createBuffer(static_cast<VkDeviceSize>(grown) * sizeof(EdgePoint),
+                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false);
+    if (!p.ok()) return p.error();
+    auto r = ctx->createBuffer(static_cast<VkDeviceSize>(grown) * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
+    if (!r.ok()) return r.error();
+    points = std::move(*p);
+    residuals = std::move(*r);
+    point_capacity = grown;
+    for (Level& L : levels) {
+      const Buffer* buffers[3] = {&points, &residuals, &partials};
+      VkDescriptorBufferInfo infos[3];
+      VkWriteDescriptorSet writes[3];
+      for (int i = 0; i < 3; ++i) {
+        infos[i] = {buffers[i]->buffer.get(), 0, VK_WHOLE_SIZE};
+        writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+        writes[i].dstSet = L.set;
+        writes[i].dstBinding = EDGE_BINDING_POINTS + i;
+        writes[i].descriptorCount = 1;
+        writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        writes[i].pBufferInfo = &infos[i];
+      }
+      vkUpdateDescriptorSets(device, 3, writes, 0, nullptr);
+    }
+  }
+  return Status::success();
+}
+
+Status GpuEdgeStages::Impl::begin() {
+  VKLOC_VK(vkResetCommandBuffer(cmd, 0));
+  VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  VKLOC_VK(vkBeginCommandBuffer(cmd, &bi));
+  marks.clear();
+  if (query_pool) {
+    vkCmdResetQueryPool(cmd, query_pool.get(), 0, kMaxTimestamps);
+    mark("");
+  }
+  return Status::success();
+}
+
+void GpuEdgeStages::Impl::mark(const char* stage) {
+  if (!query_pool || marks.size() >= kMaxTimestamps) return;
+  vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, query_pool.get(), static_cast<uint32_t>(marks.size()));
+  marks.emplace_back(stage);
+}
+
+static void addTiming(std::vector<GpuStageTiming>& timings, const std::string& stage, double ms) {
+  for (GpuStageTiming& t : timings) {
+    if (t.stage == stage) {
+      t.ms += ms;
+      return;
+    }
+  }
+  timings.push_back({stage, ms});
+}
+
+Status GpuEdgeStages::Impl::submit() {
+  hostBarrier(cmd);
+  VKLOC_VK(vkEndCommandBuffer(cmd));
+  const auto t0 = std::chrono::steady_clock::now();
+  VKLOC_TRY_STATUS(ctx->submitAndWait(cmd, fence.get()));
+  const double host_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (query_pool && marks.size() > 1) {
+    std::vector<uint64_t> ticks(marks.size());
+    VKLOC_VK(vkGetQueryPoolResults(device, query_pool.get(), 0, static_cast<uint32_t>(marks.size()),
+                                   ticks.size() * sizeof(uint64_t), ticks.data(), sizeof(uint64_t),
+                                   VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
+    for (size_t i = 1; i < marks.size(); ++i) {
+      const uint64_t dt = (ticks[i] - ticks[i - 1]) & timestamp_mask;
+      addTiming(timings, marks[i], static_cast<double>(dt) * timestamp_ns * 1e-6);
+    }
+  } else {
+    addTiming(timings, "submission (host)", host_ms);
+  }
+  return Status::success();
+}
+
+EdgePush GpuEdgeStages::Impl::levelPush(int level) const {
+  EdgePush push{};
+  push.width = levels[level].camera.width;
+  push.height = levels[level].camera.height;
+  push.high_factor = static_cast<float>(options.detector.high_factor);
+  push.min_high_gradient = static_cast<float>(options.detector.min_high_gradient);
+  push.low_ratio = static_cast<float>(options.detector.low_ratio);
+  push.truncation_px = options.truncation_px;
+  push.group_count = kGridGroups;
+  return push;
+}
+
+void GpuEdgeStages::Impl::dispatch(Kernel k, int level, const EdgePush& push, uint32_t gx, uint32_t gy) {
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipelines[k].get());
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_layout.get(), 0, 1, &levels[level].set, 0,
+                          nullptr);
+  vkCmdPushConstants(cmd, pipeline_layout.get(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(EdgePush), &push);
+  vkCmdDispatch(cmd, gx, gy, 1);
+  computeBarrier(cmd);
+}
+
+// Pyramid level, gradient, thresholds, NMS and the first hysteresis passes of one level.
+void GpuEdgeStages::Impl::recordFront(int level) {
+  Level& L = levels[level];
+  EdgePush push = levelPush(level);
+  const uint32_t gx = groups(push.width, 16), gy = groups(push.height, 16);
+  if (level == 0) {
+    dispatch(kConvert, level, push, gx, gy);
+    mark("upload");
+  } else {
+    dispatch(kPyramid, level, push, gx, gy);
+    mark("pyramid");
+  }
+  dispatch(kSobel, level, push, gx, gy);
+  mark("sobel");
+  vkCmdFillBuffer(cmd, L.hist.buffer.get(), 0, VK_WHOLE_SIZE, 0);
+  vkCmdFillBuffer(cmd, L.control.buffer.get(), 0, VK_WHOLE_SIZE, 0);
+  computeBarrier(cmd);
+  const uint64_t n = static_cast<uint64_t>((push.width + 1) / 2) * ((push.height + 1) / 2);
+  push.rank = static_cast<uint32_t>(std::min<uint64_t>(
+      n - 1, static_cast<uint64_t>(options.detector.contrast_percentile * static_cast<double>(n - 1))));
+  for (int pass = 0; pass < 3; ++pass) {
+    push.step = pass;
+    dispatch(kHist, level, push, kGridGroups);
+    dispatch(kSelect, level, push, 1);
+  }
+  mark("threshold");
+  dispatch(kNms, level, push, gx, gy);
+  mark("nms");
+  L.hysteresis_passes = 0;
+  recordHysteresis(level, kHysteresisBatch);
+}
+
+void GpuEdgeStages::Impl::recordHysteresis(int level, int passes) {
+  Level& L = levels[level];
+  EdgePush push = levelPush(level);
+  vkCmdFillBuffer(cmd, L.control.buffer.get(), offsetof(EdgeControl, changes), 4 * EDGE_MAX_HYSTERESIS_PASSES, 0);
+  computeBarrier(cmd);
+  for (int i = 0; i < passes; ++i) {
+    push.step = i;
+    dispatch(kHysteresis, level, push, kGridGroups);
+  }
+  mark("hysteresis");
+}
+
+void GpuEdgeStages::Impl::recordDistance(int level) {
+  Level& L = levels[level];
+  EdgePush push = levelPush(level);
+  const uint32_t gx = groups(push.width, 16), gy = groups(push.height, 16);
+  dispatch(kJfaInit, level, push, gx, gy);
+  // JFA+2 from the step that reaches the truncation distance: steps S, S/2, .., 1, then 2, 1.
+  const uint32_t start = std::min(nextPowerOfTwo(std::ceil(options.truncation_px)),
+                                  std::max<uint32_t>(1, nextPowerOfTwo(std::max(push.width, push.height)) / 2));
+  std::vector<int> steps;
+  for (uint32_t s = start; s >= 1; s /= 2) steps.push_back(static_cast<int>(s));
+  if (start >= 2) steps.push_back(2);
+  steps.push_back(1);
+  bool in_b = false;
+  for (int s : steps) {
+    push.step = s;
+    push.flags = in_b ? 1u : 0u;
+    dispatch(kJfaStep, level, push, gx, gy);
+    in_b = !in_b;
+  }
+  L.seeds_in_b = in_b;
+  mark("jfa");
+  push.flags = in_b ? 1u : 0u;
+  dispatch(kDistance, level, push, gx, gy);
+  dispatch(kDistanceGradient, level, push, gx, gy);
+  mark("distance+gradient");
+}
+
+GpuEdgeStages::GpuEdgeStages(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+GpuEdgeStages::~GpuEdgeStages() = default;
+
+Result<std::unique_ptr<GpuEdgeStages>> GpuEdgeStages::create(std::shared_ptr<GpuContext> context,
+                                                             const PinholeCamera& camera,
+                                                             const LiveFrameOptions& options) {
+  if (!context) return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages: no GPU context");
+  VKLOC_TRY_STATUS(validateCamera(camera));
+  VKLOC_TRY_STATUS(validateEdgeDetectorOptions(options.detector));
+  if (options.levels < 1 || options.levels > 8) {
+    return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages: levels must be in 1..8");
+  }
+  if (!(options.truncation_px > 0) || !std::isfinite(options.truncation_px) || options.truncation_px > 16384) {
+    return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages: truncation_px must be in (0, 16384]");
+  }
+  if (camera.width > 65535 || camera.height > 65535) {
+    return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages: images wider or taller than 65535 px");
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->context = context;
+  impl->ctx = &context->impl();
+  impl->camera = camera;
+  impl->options = options;
+  VKLOC_TRY_STATUS(impl->init());
+  return std::unique_ptr<GpuEdgeStages>(new GpuEdgeStages(std::move(impl)));
+}
+
+int GpuEdgeStages::levelCount() const { return static_cast<int>(impl_->levels.size()); }
+
+PinholeCamera GpuEdgeStages::levelCamera(int level) const {
+  if (level < 0 || level >= levelCount()) return {};
+  return impl_->levels[level].camera;
+}
+
+std::vector<int> GpuEdgeStages::lastHysteresisPasses() const {
+  std::vector<int> out;
+  for (const auto& L : impl_->levels) out.push_back(L.hysteresis_passes);
+  return out;
+}
+
+const std::vector<GpuStageTiming>& GpuEdgeStages::lastTimings() const { return impl_->timings; }
+
+Status GpuEdgeStages::processLiveImage(const ImageU8& gray) {
+  Impl& m = *impl_;
+  if (gray.channels != 1 || gray.width != m.camera.width || gray.height != m.camera.height ||
+      gray.data.size() != static_cast<size_t>(gray.width) * gray.height) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("GpuEdgeStages::processLiveImage: image is {}x{}x{}, camera expects {}x{} "
+                                 "single-channel",
+                                 gray.width, gray.height, gray.channels, m.camera.width, m.camera.height));
+  }
+  m.timings.clear();
+  m.have_frame = false;
+  VKLOC_TRY_STATUS(m.ctx->upload(m.input8, gray.data.data(), gray.data.size()));
+  VKLOC_TRY_STATUS(m.begin());
+  for (int k = 0; k < static_cast<int>(m.levels.size()); ++k) m.recordFront(k);
+  VKLOC_TRY_STATUS(m.submit());
+  // Hysteresis until a pass promotes nothing (bounded by EDGE_MAX_HYSTERESIS_PASSES).
+  std::vector<int> pending;
+  for (int k = 0; k < static_cast<int>(m.levels.size()); ++k) pending.push_back(k);
+  for (;;) {
+    const std::vector<int> checked = std::move(pending);
+    pending.clear();
+    for (int k : checked) {
+      // Passes that ran: up to and including the first that promoted nothing.
+      const auto* control = static_cast<const EdgeControl*>(m.levels[k].control.mapped);
+      int ran = 0;
+      while (ran < kHysteresisBatch && control->changes[ran] != 0) ++ran;
+      const bool changed = ran == kHysteresisBatch;
+      m.levels[k].hysteresis_passes += changed ? ran : ran + 1;
+      if (changed && m.levels[k].hysteresis_passes + kHysteresisBatch <= EDGE_MAX_HYSTERESIS_PASSES) {
+        pending.push_back(k);
+      }
+    }
+    if (pending.empty()) break;
+    VKLOC_TRY_STATUS(m.begin());
+    for (int k : pending) m.recordHysteresis(k, kHysteresisBatch);
+    VKLOC_TRY_STATUS(m.submit());
+  }
+  VKLOC_TRY_STATUS(m.begin());
+  for (int k = 0; k < static_cast<int>(m.levels.size()); ++k) m.recordDistance(k);
+  VKLOC_TRY_STATUS(m.submit());
+  m.have_frame = true;
+  return Status::success();
+}
+
+Result<LiveFrame> GpuEdgeStages::readLiveFrame() {
+  Impl& m = *impl_;
+  if (!m.have_frame) return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages::readLiveFrame: no live image yet");
+  // Gray, state, distance (4 bytes per pixel) and gradient (8) of every level, packed.
+  VkDeviceSize total = 0;
+  for (const auto& L : m.levels) total += static_cast<VkDeviceSize>(L.camera.width) * L.camera.height * 20 + 64;
+  auto staging = m.ctx->createBuffer(total, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
+  if (!staging.ok()) return staging.error();
+  std::vector<std::array<VkDeviceSize, 4>> offsets;
+  VKLOC_TRY_STATUS(m.ctx->runOnce([&](VkCommandBuffer c) {
+    VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+    mb.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
+    vkCmdPipelineBarrier(c, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &mb, 0, nullptr,
+                         0, nullptr);
+    VkDeviceSize offset = 0;
+    for (auto& L : m.levels) {
+      std::array<VkDeviceSize, 4> o{};
+      const engine::Image* images[4] = {&L.gray, &L.state, &L.distance, &L.dgrad};
+      for (int i = 0; i < 4; ++i) {
+        o[i] = offset;
+        VkBufferImageCopy region{};
+        region.bufferOffset = offset;
+        region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        region.imageExtent = {images[i]->width, images[i]->height, 1};
+        vkCmdCopyImageToBuffer(c, images[i]->image.get(), VK_IMAGE_LAYOUT_GENERAL, staging->buffer.get(), 1, &region);
+        offset += (static_cast<VkDeviceSize>(images[i]->width) * images[i]->height * (i == 3 ? 8 : 4) + 15) / 16 * 16;
+      }
+      offsets.push_back(o);
+    }
+    mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(c, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr, 0,
+                         nullptr);
+  }));
+  const auto* base = static_cast<const uint8_t*>(staging->mapped);
+  LiveFrame frame;
+  for (size_t k = 0; k < m.levels.size(); ++k) {
+    const auto& L = m.levels[k];
+    const int w = L.camera.width, h = L.camera.height;
+    const size_t n = static_cast<size_t>(w) * h;
+    LiveLevel out;
+    out.camera = L.camera;
+    out.field.truncation_px = m.options.truncation_px;
+    out.field.distance = ImageF32(w, h, 1);
+    out.field.gradient = ImageF32(w, h, 2);
+    std::memcpy(out.field.distance.data.data(), base + offsets[k][2], n * 4);
+    std::memcpy(out.field.gradient.data.data(), base + offsets[k][3], n * 8);
+    if (m.options.keep_intermediate) {
+      out.gray = ImageF32(w, h, 1);
+      std::memcpy(out.gray.data.data(), base + offsets[k][0], n * 4);
+      out.edges = ImageU8(w, h, 1);
+      const auto* state = reinterpret_cast<const uint32_t*>(base + offsets[k][1]);
+      for (size_t i = 0; i < n; ++i) out.edges.data[i] = state[i] == 2 ? 255 : 0;
+    }
+    frame.levels.push_back(std::move(out));
+  }
+  return frame;
+}
+
+Status GpuEdgeStages::setReference(const std::vector<EdgePoint>& points) {
+  Impl& m = *impl_;
+  if (points.size() > (1u << 28)) return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages: too many points");
+  m.point_count = static_cast<uint32_t>(points.size());
+  VKLOC_TRY_STATUS(m.updatePointBindings());
+  return m.ctx->upload(m.points, points.data(), points.size() * sizeof(EdgePoint));
+}
+
+Status GpuEdgeStages::Impl::checkTracking(const Pose& T_camera_ref, int level) const {
+  if (!have_frame) return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages: no live image processed yet");
+  if (level < 0 || level >= static_cast<int>(levels.size())) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("GpuEdgeStages: level {} outside 0..{}", level, levels.size() - 1));
+  }
+  if (!isValidPose(T_camera_ref)) {
+    return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages: T_camera_ref is not a valid rigid transform");
+  }
+  return Status::success();
+}
+
+EdgePush GpuEdgeStages::Impl::trackingPush(const Pose& T_camera_ref, int level) const {
+  EdgePush push = levelPush(level);
+  const Eigen::Matrix4d T = T_camera_ref.matrix();
+  float* rows[3] = {push.pose_row0, push.pose_row1, push.pose_row2};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) rows[r][c] = static_cast<float>(T(r, c));
+  }
+  const PinholeCamera& cam = levels[level].camera;
+  push.intrinsics[0] = static_cast<float>(cam.fx);
+  push.intrinsics[1] = static_cast<float>(cam.fy);
+  push.intrinsics[2] = static_cast<float>(cam.cx);
+  push.intrinsics[3] = static_cast<float>(cam.cy);
+  push.point_count = point_count;
+  return push;
+}
+
+Result<std::vector<float>> GpuEdgeStages::residuals(const Pose& T_camera_ref, int level) {
+  Impl& m = *impl_;
+  VKLOC_TRY_STATUS(m.checkTracking(T_camera_ref, level));
+  m.timings.clear();
+  if (m.point_count == 0) return std::vector<float>{};
+  VKLOC_TRY_STATUS(m.begin());
+  m.dispatch(kResiduals, level, m.trackingPush(T_camera_ref, level), kGridGroups);
+  m.mark("residuals");
+  VKLOC_TRY_STATUS(m.submit());
+  const auto* r = static_cast<const float*>(m.residuals.mapped);
+  return std::vector<float>(r, r + m.point_count);
+}
+
+Result<EdgeNormalEquations> GpuEdgeStages::accumulate(const Pose& T_camera_ref, int level, double sigma_px, double nu) {
+  Impl& m = *impl_;
+  VKLOC_TRY_STATUS(m.checkTracking(T_camera_ref, level));
+  if (!(sigma_px > 0) || !std::isfinite(sigma_px) || !(nu > 0) || !std::isfinite(nu)) {
+    return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages::accumulate: sigma_px and nu must be > 0 and finite");
+  }
+  m.timings.clear();
+  EdgeNormalEquations out{};
+  if (m.point_count == 0) return out;
+  EdgePush push = m.trackingPush(T_camera_ref, level);
+  push.robust[0] = static_cast<float>(sigma_px);
+  push.robust[1] = static_cast<float>(nu);
+  VKLOC_TRY_STATUS(m.begin());
+  m.dispatch(kNormalEquations, level, push, kGridGroups);
+  m.mark("normal equations");
+  VKLOC_TRY_STATUS(m.submit());
+  const auto* partial = static_cast<const float*>(m.partials.mapped);
+  for (uint32_t g = 0; g < kGridGroups; ++g) {
+    for (int i = 0; i < kEdgeNormalEquationSize; ++i) out[i] += partial[g * EDGE_REDUCE_VEC4S * 4 + i];
+  }
+  return out;
+}
+
+}  // namespace vkloc

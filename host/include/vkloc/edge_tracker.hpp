@@ -1,0 +1,152 @@
+// vkloc: edge-alignment pose tracking (seed paper 000, sec. IV-C, eqs. 9-15), CPU backend.
+//
+// The reference's 3D edge points P_ref (reference camera frame) are projected into the live
+// image with the relative pose T_camera_ref, and the residual of a point is the live image's
+// distance field at the projection, r = V(pi(T_camera_ref P_ref)) (eq. 12). Gauss-Newton on
+// SE(3) with t-distribution weights (nu = 5, scale re-estimated every iteration as in Kerl et
+// al., the paper's ref. [9]) minimises sum w r^2 (eq. 13-14), coarse to fine over the pyramid.
+//
+// Tangent order and perturbation: se3.hpp. T_camera_ref is updated as
+// T_camera_ref <- expSE3(delta) * T_camera_ref with delta = [rho; phi] in the live camera frame,
+// so a point's Jacobian is (eq. 15 in this convention)
+//   J = [G_u G_v] * [fx/z 0 -fx x/z^2; 0 fy/z -fy y/z^2] * [I | -hat(p)],  p = T_camera_ref P_ref.
+// Poses are compounded as T_world_camera = T_world_ref * T_camera_ref^-1 (eqs. 4-5).
+//
+// Stages (each replaceable by a GPU kernel on the same data): evaluateEdgeResiduals (one float
+// per point), estimateTDistributionScale (a few reductions over the residuals),
+// accumulateEdgeNormalEquations (one reduction to 29 numbers), then the 6x6 solve on the host.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "vkloc/camera.hpp"
+#include "vkloc/edges.hpp"
+#include "vkloc/pose.hpp"
+#include "vkloc/se3.hpp"
+#include "vkloc/status.hpp"
+
+namespace vkloc {
+
+/// Layout of the reduced normal equations, as a GPU reduction writes them (29 values):
+///  [0, 21): upper triangle of H = sum w J^T J, row-major: (0,0) (0,1) .. (0,5) (1,1) .. (5,5)
+///  [21, 27): g = sum w J^T r (J is 1x6, [rho; phi] order)
+///  27: sum w r^2 (pixels^2)
+///  28: number of points that contributed (valid projection, distance below truncation)
+constexpr int kEdgeNormalEquationSize = 29;
+constexpr int kEdgeNormalGradientOffset = 21;
+constexpr int kEdgeNormalCostIndex = 27;
+constexpr int kEdgeNormalCountIndex = 28;
+using EdgeNormalEquations = std::array<double, kEdgeNormalEquationSize>;
+
+/// Index of H(row, col), row <= col, in EdgeNormalEquations.
+constexpr int edgeNormalIndex(int row, int col) { return row * 6 - row * (row - 1) / 2 + (col - row); }
+
+/// Unpacks the 29 values into H (symmetric 6x6) and g.
+void unpackEdgeNormalEquations(const EdgeNormalEquations& packed, Matrix6d& H, Vector6d& g);
+
+/// Marks a residual of a point that does not contribute: projects behind the camera, outside
+/// the image (bilinear footprint) or where the distance is truncated.
+constexpr float kInvalidResidual = -1.0f;
+
+/// One point's residual and Jacobian (the per-thread work of the GPU kernels).
+struct EdgePointEvaluation {
+  bool valid = false;                    ///< False when the point does not contribute.
+  double u = 0;                          ///< Projection in the level image, pixels.
+  double v = 0;                          ///< Projection, pixels.
+  double residual = 0;                   ///< Bilinear distance at (u, v), pixels.
+  Vector6d jacobian = Vector6d::Zero();  ///< d residual / d delta, [rho; phi] order (pixels per m, per rad).
+};
+
+/// Evaluates one point at T_camera_ref on `level` (its camera and distance field): projection,
+/// bilinear distance and gradient (G_u, G_v), and the Jacobian when with_jacobian. Invalid
+/// when z <= 1e-6 m, the 2x2 bilinear footprint leaves the image or any of its four distances
+/// is truncated.
+EdgePointEvaluation evaluateEdgePoint(const EdgePoint& point, const Pose& T_camera_ref, const LiveLevel& level,
+                                      bool with_jacobian);
+
+/// Residuals of all points (pixels), kInvalidResidual for points that do not contribute.
+std::vector<float> evaluateEdgeResiduals(const std::vector<EdgePoint>& points, const Pose& T_camera_ref,
+                                         const LiveLevel& level);
+
+/// Scale sigma (pixels) of the t-distribution fitted to the valid residuals (Kerl et al.):
+/// iterates sigma^2 <- mean(r^2 (nu + 1) / (nu + r^2 / sigma^2)) `iterations` times from
+/// sigma^2 = mean(r^2). At least min_sigma_px; min_sigma_px when no residual is valid.
+double estimateTDistributionScale(const std::vector<float>& residuals, double nu, int iterations,
+                                  double min_sigma_px = 0.05);
+
+/// t-distribution weight (nu + 1) / (nu + (r / sigma)^2).
+inline double tDistributionWeight(double r, double sigma, double nu) {
+  const double s = r / sigma;
+  return (nu + 1.0) / (nu + s * s);
+}
+
+/// Accumulates the normal equations over all valid points at T_camera_ref with weights
+/// tDistributionWeight(r, sigma_px, nu). Layout: EdgeNormalEquations.
+EdgeNormalEquations accumulateEdgeNormalEquations(const std::vector<EdgePoint>& points, const Pose& T_camera_ref,
+                                                  const LiveLevel& level, double sigma_px, double nu);
+
+/// Options of trackFrame.
+struct EdgeTrackerOptions {
+  double nu = 5.0;                   ///< Degrees of freedom of the t-distribution weights.
+  int scale_iterations = 5;          ///< Fixed-point iterations of the scale per GN iteration.
+  int max_iterations = 30;           ///< Gauss-Newton iterations per pyramid level.
+  int coarsest_level = -1;           ///< First (coarsest) level used; -1 = the live frame's coarsest.
+  int finest_level = 0;              ///< Last level used (0 = full resolution).
+  double min_step = 1e-7;            ///< Stop a level when |delta| (m and rad combined) falls below this.
+  double initial_damping = 1e-4;     ///< Levenberg damping (relative to diag(H)) after a rejected step.
+  double max_damping = 1e4;          ///< Give up a level when the damping exceeds this.
+  double inlier_threshold_px = 1.5;  ///< A valid residual below this (finest level pixels) is an inlier.
+  double min_inlier_ratio = 0.75;    ///< Lost below this inliers / points projected into the image.
+  /// Lost below this (inlier_ratio - chance) / (1 - chance), chance = fraction of live pixels
+  /// within inlier_threshold_px of an edge (dense edge maps make any pose look good).
+  double min_inlier_ratio_above_chance = 0.6;
+  /// Lost when the RMS spread of the projected points about their centroid changes by more than
+  /// this factor from the reference view (a pose that shrinks the points onto a few edges).
+  double max_spread_change = 2.0;
+  double min_visible_ratio = 0.5;     ///< Lost below this (points projected into the image) / (all points).
+  double max_mean_residual_px = 1.0;  ///< Lost above this mean inlier residual, finest level pixels.
+  int min_points = 30;                ///< Lost with fewer points projected into the image.
+  double max_translation_m = 1e6;     ///< Lost when the correction of the guess exceeds this (m).
+};
+
+/// Checks ranges of EdgeTrackerOptions; kInvalidArgument naming the field otherwise.
+Status validateEdgeTrackerOptions(const EdgeTrackerOptions& options);
+
+/// Tracking state decided from TrackQuality (never by silently diverging).
+enum class TrackingState { kTracking, kLost };
+
+/// How well the final pose explains the live edges, measured on the finest level used.
+struct TrackQuality {
+  double inlier_ratio = 0;         ///< Inliers / points projecting inside the image (0..1).
+  double mean_residual_px = 0;     ///< Mean residual of the inliers, pixels of the finest level used.
+  double scale_px = 0;             ///< Final t-distribution scale sigma, pixels.
+  double chance_inlier_ratio = 0;  ///< Fraction of live pixels within inlier_threshold_px of an edge.
+  double spread_ratio = 0;         ///< RMS spread of projected points, live / reference view.
+  double visible_ratio = 0;        ///< Points projecting inside the image / all points of the level (0..1).
+  int points_in_image = 0;         ///< Points projecting inside the finest level's image.
+  int points_used = 0;             ///< Points with a valid residual (not truncated) at the end.
+  int iterations = 0;              ///< Gauss-Newton iterations over all levels.
+};
+
+/// Output of trackFrame.
+struct TrackResult {
+  Pose T_world_camera = Pose::Identity();  ///< Estimated live camera pose.
+  Pose T_camera_ref = Pose::Identity();    ///< Estimated reference -> live camera transform.
+  /// Covariance of xi (m^2, rad^2, [rho; phi]) with T_world_camera_true = T_world_camera *
+  /// expSE3(xi), xi in the live camera frame: sigma^2 H^-1 at the final pose (finest level).
+  Matrix6d covariance = Matrix6d::Zero();
+  TrackQuality quality;                        ///< Quality figures.
+  TrackingState state = TrackingState::kLost;  ///< kTracking when quality passes the thresholds.
+};
+
+/// Aligns the reference's edge points (level k's points on live level k) with the live frame's
+/// distance fields, starting from
+/// T_world_camera_guess. The live frame must come from the camera the reference is projected
+/// into (its levels carry their intrinsics). Returns kInvalidArgument for an invalid guess,
+/// an empty live frame, a reference without points or bad options; a failed alignment is not
+/// an error but state kLost.
+Result<TrackResult> trackFrame(const EdgeReference& reference, const LiveFrame& live, const Pose& T_world_camera_guess,
+                               const EdgeTrackerOptions& options = {});
+
+}  // namespace vkloc

@@ -1,0 +1,218 @@
+// vkloc: edge stages of edge-alignment tracking (seed paper 000, sec. IV-C), CPU backend.
+//
+// Live image:     gray -> pyramid -> per level: edges (Canny-like) -> distance field + gradient.
+// Reference view: render (gray, depth, normals) -> edge flags -> 3D points (eq. 3) -> budget.
+//
+// Every stage takes and returns plain images (vkloc::Image, rows top to bottom, no padding) or
+// flat point lists, so that a GPU backend can replace any single stage with a compute shader
+// working on the same layouts. Pixel convention of camera.hpp: pixel (i, j)'s centre has
+// coordinates (u, v) = (i, j).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "vkloc/camera.hpp"
+#include "vkloc/image.hpp"
+#include "vkloc/pose.hpp"
+#include "vkloc/render.hpp"
+#include "vkloc/status.hpp"
+
+namespace vkloc {
+
+// --- edge detection ------------------------------------------------------------------------
+
+/// Canny-like edge detector whose thresholds follow the image's contrast.
+///
+/// Gradient: 3x3 Sobel divided by 8 (gray levels per pixel), magnitude sqrt(gx^2 + gy^2).
+/// Thresholds: s = the `contrast_percentile` quantile of the magnitude over all pixels;
+/// high = max(high_factor * s, min_high_gradient), low = low_ratio * high. Multiplying the image
+/// by a constant multiplies s and every magnitude alike, so the same edges survive (only the
+/// absolute floor, which acts on nearly flat images, is not scale-free).
+/// Non-maximum suppression along the gradient direction quantised to 4 directions keeps a pixel
+/// whose magnitude is >= both neighbours and > at least one: on an ideal step both pixels next
+/// to it are kept (a symmetric 2-pixel edge centred on the step, no half-pixel bias).
+/// Hysteresis: 8-connected growth from pixels >= high through pixels >= low.
+struct EdgeDetectorOptions {
+  double contrast_percentile = 0.9;  ///< Quantile (0..1) of the gradient magnitude taken as contrast s.
+  double high_factor = 1.0;          ///< High threshold = high_factor * s.
+  double low_ratio = 0.4;            ///< Low threshold = low_ratio * high (0..1).
+  double min_high_gradient = 2.0;    ///< Floor of the high threshold, gray levels per pixel.
+};
+
+/// Edge map of a gray image (any value range, typically 0..255): 255 on edge pixels, 0 elsewhere.
+/// kInvalidArgument for an empty or multi-channel image or options out of range.
+Result<ImageU8> detectEdges(const ImageF32& gray, const EdgeDetectorOptions& options = {});
+
+/// Checks ranges of EdgeDetectorOptions; kInvalidArgument naming the field otherwise.
+Status validateEdgeDetectorOptions(const EdgeDetectorOptions& options);
+
+// --- live image: pyramid and distance fields ------------------------------------------------
+
+/// Intrinsics of pyramid level `level` (0 = full resolution) made by the 2x downsampling of
+/// downsampleHalf: size (w + 1) / 2 per level, fx' = fx / 2, cx' = (cx + 0.5) / 2 - 0.5 (the
+/// output pixel i covers input pixels 2i and 2i + 1, its centre lies at input u = 2i + 0.5).
+PinholeCamera pyramidCamera(const PinholeCamera& camera, int level);
+
+/// Halves a single-channel float image: separable binomial low-pass [1 3 3 1] / 8 on input
+/// pixels 2i - 1 .. 2i + 2 (borders replicated), output size ((w + 1) / 2, (h + 1) / 2).
+ImageF32 downsampleHalf(const ImageF32& image);
+
+/// Converts an 8-bit gray image to float (same values 0..255).
+ImageF32 toFloat(const ImageU8& gray);
+
+/// Euclidean distance field of an edge map with its gradient (the V and G_u, G_v of eqs. 12-15).
+struct DistanceField {
+  /// 1 channel, pixels: exact Euclidean distance from each pixel centre to the nearest edge
+  /// pixel centre (OpenCV DIST_L2 with DIST_MASK_PRECISE), clamped to truncation_px.
+  ImageF32 distance;
+  /// 2 channels (G_u, G_v), pixels per pixel: central differences (d(i+1) - d(i-1)) / 2 of
+  /// `distance` along u and v; one-sided differences on the image border; (0, 0) where the
+  /// distance or a neighbour used is truncated (no direction to an edge is known there).
+  ImageF32 gradient;
+  float truncation_px = 0;  ///< Distances >= this are "far from any edge" (outliers).
+};
+
+/// Distance field of an edge map (non-zero = edge). With no edge at all every distance is
+/// truncation_px. kInvalidArgument for an empty or multi-channel map or truncation_px <= 0.
+Result<DistanceField> computeDistanceField(const ImageU8& edges, float truncation_px);
+
+/// Options of the live-image stages.
+struct LiveFrameOptions {
+  int levels = 3;                 ///< Pyramid levels (1..8); level k has size / 2^k.
+  float truncation_px = 20.0f;    ///< Distance truncation at every level, in that level's pixels.
+  EdgeDetectorOptions detector;   ///< Edge detector used at every level.
+  bool keep_intermediate = true;  ///< Keep gray and edge images per level (for display/tests).
+};
+
+/// One pyramid level of a live frame.
+struct LiveLevel {
+  PinholeCamera camera;  ///< Intrinsics of this level (pyramidCamera).
+  ImageF32 gray;         ///< Low-passed gray image (empty unless keep_intermediate).
+  ImageU8 edges;         ///< Edge map, 255 = edge (empty unless keep_intermediate).
+  DistanceField field;   ///< Distance to the nearest edge and its gradient.
+};
+
+/// The live image prepared for tracking: distance fields per level, finest (0) first.
+struct LiveFrame {
+  std::vector<LiveLevel> levels;
+};
+
+/// Builds the pyramid, edges and distance fields of a gray live image taken with `camera`
+/// (pixels 0..255). kInvalidArgument when the image size differs from the camera's, the image
+/// is empty or multi-channel, or an option is out of range; a level smaller than 8x8 pixels is
+/// not built (fewer levels are returned).
+Result<LiveFrame> buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera,
+                                 const LiveFrameOptions& options = {});
+
+// --- reference view: 3D edge points ---------------------------------------------------------
+
+/// Per-pixel flags of the reference edge map (stage 1 output, one byte per pixel). Geometric
+/// edges lie between a pixel and a 4-neighbour; the flag sits on the flagged pixel and names the
+/// side where the neighbour is.
+enum EdgePixelFlags : uint8_t {
+  kEdgePixelTexture = 1u << 0,         ///< Intensity edge of the rendered gray image.
+  kEdgePixelOcclusionRight = 1u << 1,  ///< Near side of a depth jump to the right neighbour.
+  kEdgePixelOcclusionLeft = 1u << 2,   ///< Near side of a depth jump to the left neighbour.
+  kEdgePixelOcclusionDown = 1u << 3,   ///< Near side of a depth jump to the neighbour below.
+  kEdgePixelOcclusionUp = 1u << 4,     ///< Near side of a depth jump to the neighbour above.
+  kEdgePixelCreaseRight = 1u << 5,     ///< Normal discontinuity to the right neighbour.
+  kEdgePixelCreaseDown = 1u << 6,      ///< Normal discontinuity to the neighbour below.
+};
+
+/// What an edge point was made from.
+enum EdgeKind : uint32_t {
+  kEdgeTexture = 1u << 0,    ///< Intensity edge in the rendered gray image.
+  kEdgeOcclusion = 1u << 1,  ///< Depth discontinuity (silhouette, occluding edge), near surface.
+  kEdgeCrease = 1u << 2,     ///< Normal discontinuity.
+};
+
+/// A 3D edge point in the reference camera frame; 16 bytes, the std430 layout of a vec4.
+struct EdgePoint {
+  float x = 0;        ///< Reference camera frame, metres (x right).
+  float y = 0;        ///< Metres (y down).
+  float z = 0;        ///< Metres (z forward, > 0).
+  uint32_t kind = 0;  ///< EdgeKind of the point.
+};
+static_assert(sizeof(EdgePoint) == 16, "EdgePoint must match a GLSL vec4");
+
+/// How reference edges are taken from a rendered view.
+struct ReferenceEdgeOptions {
+  bool texture_edges = true;       ///< Use intensity edges of the rendered gray image.
+  bool occlusion_edges = true;     ///< Use depth discontinuities.
+  bool crease_edges = true;        ///< Use normal discontinuities.
+  double depth_jump_ratio = 0.05;  ///< Depth discontinuity: |z_a - z_b| > ratio * min(z_a, z_b).
+  double crease_angle_deg = 30.0;  ///< Crease: angle between neighbouring normals above this, degrees.
+  EdgeDetectorOptions detector;    ///< Texture edge detector (as for live images).
+  int cell_px = 16;                ///< Subsampling grid cell side, pixels.
+  int max_points_per_cell = 6;     ///< At most this many points per cell.
+  int max_points = 4000;           ///< Total budget of points per level (> 0).
+  int levels = 3;                  ///< Pyramid levels of buildEdgeReference (1..8), as the live frame's.
+};
+
+/// Checks ranges of ReferenceEdgeOptions; kInvalidArgument naming the field otherwise.
+Status validateReferenceEdgeOptions(const ReferenceEdgeOptions& options);
+
+/// Stage 1: per-pixel EdgePixelFlags of a rendered view (0 = no edge), same size as the view.
+/// Geometric edges are found between 4-neighbours p and q: a depth discontinuity (or surface
+/// next to background) sets the occlusion flag pointing at q on the NEAR pixel p; a crease (both
+/// surfaces, no depth jump, normals more than crease_angle_deg apart) sets the crease flag on
+/// the left/upper pixel of the pair.
+/// Texture edges (detectEdges on the rendered gray, the live images' detector) take precedence:
+/// geometric flags within one pixel of a texture edge pixel are dropped, so a geometric edge
+/// that is visible in the gray image is placed exactly where the live detector places it, and
+/// geometric points remain where the render shows no intensity edge (untextured or unshaded
+/// models). Texture edges on background are kept only next to a geometric edge. The view needs
+/// gray and depth; normals are needed for creases (skipped when absent). kInvalidArgument when
+/// sizes disagree or gray/depth are missing.
+Result<ImageU8> detectReferenceEdges(const RenderOutput& view, const ReferenceEdgeOptions& options = {});
+
+/// Stage 2: back-projects flagged pixels into the reference camera frame (eq. 3,
+/// P = z ((u - cx) / fx, (v - cy) / fy, 1)) and compacts them in row-major order. A texture
+/// edge is placed at its pixel centre with the depth of the near surface: its own depth, or the
+/// smallest depth among its 8-neighbours across a depth jump (an edge pixel on the far side of a
+/// silhouette belongs to the occluding surface). A geometric edge is placed on the
+/// boundary between the pixel pair, half a pixel from the flagged pixel towards its
+/// neighbour, with the depth of the near surface (occlusion: the near pixel's depth, linearly
+/// extrapolated by half a pixel from the near side when that side is continuous; crease: the
+/// mean of the two depths). Pixels without depth are skipped.
+/// One point is made per flag bit. `options` gives depth_jump_ratio (continuity test).
+std::vector<EdgePoint> backProjectEdges(const ImageU8& flags, const ImageF32& depth, const PinholeCamera& camera,
+                                        const ReferenceEdgeOptions& options = {});
+
+/// Stage 3: spatially even subsample. Points are bucketed by the pixel they project to in
+/// `camera` into cells of cell_px; every cell keeps at most k points, k = the largest value
+/// <= max_points_per_cell with a total <= max_points (evenly spaced in the cell's list order);
+/// if even k = 1 exceeds the budget, evenly spaced cells are kept. Deterministic; the order of
+/// the input is preserved.
+std::vector<EdgePoint> subsampleEdgePoints(const std::vector<EdgePoint>& points, const PinholeCamera& camera,
+                                           const ReferenceEdgeOptions& options = {});
+
+/// A reference for tracking: 3D edge points of a view rendered from T_world_ref, extracted per
+/// pyramid level so that each level's points are the edges the live pyramid shows there.
+struct EdgeReference {
+  PinholeCamera camera;                 ///< Camera the reference was rendered with (level 0).
+  Pose T_world_ref = Pose::Identity();  ///< Pose of the reference (virtual) camera.
+  /// Edge points found at full resolution (pyramid level 0), reference camera frame, metres.
+  std::vector<EdgePoint> points;
+  /// coarse_points[k - 1]: edge points found at pyramid level k >= 1 (same frame and units).
+  std::vector<std::vector<EdgePoint>> coarse_points;
+};
+
+/// Points of pyramid level `level` (level 0: points; coarser: coarse_points, the coarsest
+/// available for levels beyond it).
+inline const std::vector<EdgePoint>& edgePointsForLevel(const EdgeReference& reference, int level) {
+  if (level <= 0 || reference.coarse_points.empty()) return reference.points;
+  const size_t k = static_cast<size_t>(level) - 1;
+  return reference.coarse_points[k < reference.coarse_points.size() ? k : reference.coarse_points.size() - 1];
+}
+
+/// Runs stages 1-3 on a view rendered with `camera` at T_world_ref at `options.levels` pyramid
+/// levels: level k's gray image is downsampled exactly as the live pyramid (downsampleHalf), its
+/// depth and normals are those of the nearest surface in each 2x2 block, and its points are
+/// back-projected with pyramidCamera(camera, k) (levels below 8x8 pixels are not built).
+/// kInvalidArgument on bad options, sizes that differ from the camera's or an invalid pose.
+Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const PinholeCamera& camera, const Pose& T_world_ref,
+                                         const ReferenceEdgeOptions& options = {});
+
+}  // namespace vkloc

@@ -1,0 +1,336 @@
+// Gauss-Newton edge alignment on SE(3), CPU backend (see edge_tracker.hpp).
+#include "vkloc/edge_tracker.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+namespace vkloc {
+namespace {
+
+bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
+
+/// sum over all points of log(1 + r^2 / (nu sigma^2)), the negative log-likelihood of the
+/// t-distribution up to constants; points that do not contribute count as truncated.
+double robustCost(const std::vector<float>& residuals, double sigma, double nu, double truncation) {
+  const double inv = 1.0 / (nu * sigma * sigma);
+  const double invalid_cost = std::log1p(truncation * truncation * inv);
+  double cost = 0;
+  for (float r : residuals) cost += r < 0 ? invalid_cost : std::log1p(static_cast<double>(r) * r * inv);
+  return cost;
+}
+
+/// True when the 2x2 bilinear footprint of (u, v) lies inside a w x h image.
+bool footprintInside(double u, double v, int w, int h) { return u >= 0 && v >= 0 && u < w - 1 && v < h - 1; }
+
+}  // namespace
+
+void unpackEdgeNormalEquations(const EdgeNormalEquations& packed, Matrix6d& H, Vector6d& g) {
+  for (int r = 0; r < 6; ++r) {
+    for (int c = r; c < 6; ++c) {
+      H(r, c) = packed[edgeNormalIndex(r, c)];
+      H(c, r) = H(r, c);
+    }
+    g[r] = packed[kEdgeNormalGradientOffset + r];
+  }
+}
+
+EdgePointEvaluation evaluateEdgePoint(const EdgePoint& point, const Pose& T_camera_ref, const LiveLevel& level,
+                                      bool with_jacobian) {
+  EdgePointEvaluation e;
+  const Eigen::Vector3d p = T_camera_ref * Eigen::Vector3d(point.x, point.y, point.z);
+  if (!(p.z() > 1e-6)) return e;
+  const PinholeCamera& cam = level.camera;
+  const double iz = 1.0 / p.z();
+  e.u = cam.fx * p.x() * iz + cam.cx;
+  e.v = cam.fy * p.y() * iz + cam.cy;
+  const ImageF32& D = level.field.distance;
+  if (!footprintInside(e.u, e.v, D.width, D.height)) return e;
+  const int x0 = static_cast<int>(e.u);
+  const int y0 = static_cast<int>(e.v);
+  const double a = e.u - x0;
+  const double b = e.v - y0;
+  const float trunc = level.field.truncation_px;
+  const float d00 = D.at(x0, y0);
+  const float d10 = D.at(x0 + 1, y0);
+  const float d01 = D.at(x0, y0 + 1);
+  const float d11 = D.at(x0 + 1, y0 + 1);
+  if (d00 >= trunc || d10 >= trunc || d01 >= trunc || d11 >= trunc) return e;
+  const double w00 = (1 - a) * (1 - b);
+  const double w10 = a * (1 - b);
+  const double w01 = (1 - a) * b;
+  const double w11 = a * b;
+  e.residual = w00 * d00 + w10 * d10 + w01 * d01 + w11 * d11;
+  e.valid = true;
+  if (!with_jacobian) return e;
+  const ImageF32& G = level.field.gradient;
+  const double gu =
+      w00 * G.at(x0, y0, 0) + w10 * G.at(x0 + 1, y0, 0) + w01 * G.at(x0, y0 + 1, 0) + w11 * G.at(x0 + 1, y0 + 1, 0);
+  const double gv =
+      w00 * G.at(x0, y0, 1) + w10 * G.at(x0 + 1, y0, 1) + w01 * G.at(x0, y0 + 1, 1) + w11 * G.at(x0 + 1, y0 + 1, 1);
+  // dr/dp = [G_u G_v] d(u, v)/dp (eq. 15), then dp/d(delta) = [I | -hat(p)]:
+  // the rotation part -dr/dp hat(p) equals (p x dr/dp)^T.
+  const double ga = gu * cam.fx * iz;
+  const double gb = gv * cam.fy * iz;
+  const Eigen::Vector3d dr_dp(ga, gb, -(ga * p.x() + gb * p.y()) * iz);
+  e.jacobian.head<3>() = dr_dp;
+  e.jacobian.tail<3>() = p.cross(dr_dp);
+  return e;
+}
+
+std::vector<float> evaluateEdgeResiduals(const std::vector<EdgePoint>& points, const Pose& T_camera_ref,
+                                         const LiveLevel& level) {
+  std::vector<float> residuals(points.size(), kInvalidResidual);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const EdgePointEvaluation e = evaluateEdgePoint(points[i], T_camera_ref, level, false);
+    if (e.valid) residuals[i] = static_cast<float>(e.residual);
+  }
+  return residuals;
+}
+
+double estimateTDistributionScale(const std::vector<float>& residuals, double nu, int iterations, double min_sigma_px) {
+  double sum = 0;
+  size_t n = 0;
+  for (float r : residuals) {
+    if (r < 0) continue;
+    sum += static_cast<double>(r) * r;
+    ++n;
+  }
+  const double min_var = min_sigma_px * min_sigma_px;
+  if (n == 0) return min_sigma_px;
+  double var = std::max(sum / n, min_var);
+  for (int it = 0; it < iterations; ++it) {
+    double acc = 0;
+    for (float r : residuals) {
+      if (r < 0) continue;
+      const double r2 = static_cast<double>(r) * r;
+      acc += r2 * (nu + 1.0) / (nu + r2 / var);
+    }
+    var = std::max(acc / n, min_var);
+  }
+  return std::sqrt(var);
+}
+
+EdgeNormalEquations accumulateEdgeNormalEquations(const std::vector<EdgePoint>& points, const Pose& T_camera_ref,
+                                                  const LiveLevel& level, double sigma_px, double nu) {
+  EdgeNormalEquations out{};
+  for (const EdgePoint& point : points) {
+    const EdgePointEvaluation e = evaluateEdgePoint(point, T_camera_ref, level, true);
+    if (!e.valid) continue;
+    const double w = tDistributionWeight(e.residual, sigma_px, nu);
+    const Vector6d& J = e.jacobian;
+    for (int r = 0; r < 6; ++r) {
+      const double wj = w * J[r];
+      for (int c = r; c < 6; ++c) out[edgeNormalIndex(r, c)] += wj * J[c];
+      out[kEdgeNormalGradientOffset + r] += wj * e.residual;
+    }
+    out[kEdgeNormalCostIndex] += w * e.residual * e.residual;
+    out[kEdgeNormalCountIndex] += 1.0;
+  }
+  return out;
+}
+
+Status validateEdgeTrackerOptions(const EdgeTrackerOptions& o) {
+  if (!finiteIn(o.nu, 1e-3, 1e6))
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: nu must be in 1e-3..1e6");
+  if (o.scale_iterations < 0 || o.scale_iterations > 100) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: scale_iterations must be in 0..100");
+  }
+  if (o.max_iterations < 1 || o.max_iterations > 1000) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: max_iterations must be in 1..1000");
+  }
+  if (o.finest_level < 0) return makeError(ErrorCode::kInvalidArgument, "edge tracker: finest_level must be >= 0");
+  if (o.coarsest_level >= 0 && o.coarsest_level < o.finest_level) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: coarsest_level must be -1 or >= finest_level");
+  }
+  if (!finiteIn(o.min_step, 0.0, 1.0))
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: min_step must be in 0..1");
+  if (!finiteIn(o.initial_damping, 1e-12, 1e6) || !finiteIn(o.max_damping, o.initial_damping, 1e12)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: need 1e-12 <= initial_damping <= max_damping <= 1e12");
+  }
+  if (!finiteIn(o.inlier_threshold_px, 1e-6, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: inlier_threshold_px must be > 0");
+  }
+  if (!finiteIn(o.min_inlier_ratio, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: min_inlier_ratio must be in 0..1");
+  }
+  if (!finiteIn(o.min_inlier_ratio_above_chance, -1.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: min_inlier_ratio_above_chance must be in -1..1");
+  }
+  if (!finiteIn(o.max_spread_change, 1.0, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: max_spread_change must be >= 1");
+  }
+  if (!finiteIn(o.min_visible_ratio, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: min_visible_ratio must be in 0..1");
+  }
+  if (!finiteIn(o.max_mean_residual_px, 0.0, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: max_mean_residual_px must be >= 0");
+  }
+  if (o.min_points < 6) return makeError(ErrorCode::kInvalidArgument, "edge tracker: min_points must be >= 6");
+  if (!(o.max_translation_m > 0)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: max_translation_m must be > 0");
+  }
+  return Status::success();
+}
+
+Result<TrackResult> trackFrame(const EdgeReference& reference, const LiveFrame& live, const Pose& T_world_camera_guess,
+                               const EdgeTrackerOptions& options) {
+  VKLOC_TRY_STATUS(validateEdgeTrackerOptions(options));
+  if (!isValidPose(T_world_camera_guess)) {
+    return makeError(ErrorCode::kInvalidArgument, "trackFrame: T_world_camera_guess is not a valid rigid transform");
+  }
+  if (!isValidPose(reference.T_world_ref)) {
+    return makeError(ErrorCode::kInvalidArgument, "trackFrame: reference T_world_ref is not a valid rigid transform");
+  }
+  if (reference.points.empty()) {
+    return makeError(ErrorCode::kInvalidArgument, "trackFrame: reference has no edge points");
+  }
+  if (live.levels.empty()) return makeError(ErrorCode::kInvalidArgument, "trackFrame: live frame has no levels");
+  const int levels = static_cast<int>(live.levels.size());
+  if (options.finest_level >= levels) {
+    return makeError(
+        ErrorCode::kInvalidArgument,
+        fmt::format("trackFrame: finest_level {} but the live frame has {} levels", options.finest_level, levels));
+  }
+  for (const LiveLevel& level : live.levels) {
+    const DistanceField& f = level.field;
+    if (f.distance.width != level.camera.width || f.distance.height != level.camera.height ||
+        f.distance.channels != 1 || f.gradient.width != f.distance.width || f.gradient.height != f.distance.height ||
+        f.gradient.channels != 2 ||
+        f.distance.data.size() != static_cast<size_t>(f.distance.width) * f.distance.height ||
+        f.gradient.data.size() != 2 * f.distance.data.size() || !(f.truncation_px > 0)) {
+      return makeError(ErrorCode::kInvalidArgument,
+                       "trackFrame: a live level's distance field does not match its camera");
+    }
+  }
+  const int coarsest = options.coarsest_level < 0 ? levels - 1 : std::min(options.coarsest_level, levels - 1);
+  auto pointsFor = [&](int level) -> const std::vector<EdgePoint>& { return edgePointsForLevel(reference, level); };
+
+  const Pose T_camera_ref_guess = T_world_camera_guess.inverse() * reference.T_world_ref;
+  Pose T = T_camera_ref_guess;
+  int iterations = 0;
+  for (int level_index = coarsest; level_index >= options.finest_level; --level_index) {
+    const LiveLevel& level = live.levels[level_index];
+    const std::vector<EdgePoint>& points = pointsFor(level_index);
+    if (points.size() < 6) continue;
+    const double trunc = level.field.truncation_px;
+    std::vector<float> residuals = evaluateEdgeResiduals(points, T, level);
+    double lambda = 0;
+    for (int it = 0; it < options.max_iterations; ++it) {
+      const double sigma = estimateTDistributionScale(residuals, options.nu, options.scale_iterations);
+      const EdgeNormalEquations eq = accumulateEdgeNormalEquations(points, T, level, sigma, options.nu);
+      if (eq[kEdgeNormalCountIndex] < 6) break;
+      Matrix6d H;
+      Vector6d g;
+      unpackEdgeNormalEquations(eq, H, g);
+      // Solve (H + lambda diag(H)) delta = -g (eq. 14); damping only after a failed solve or a
+      // rejected step.
+      Vector6d delta = Vector6d::Zero();
+      bool solved = false;
+      while (lambda <= options.max_damping) {
+        Matrix6d A = H;
+        A.diagonal() += lambda * H.diagonal() + Vector6d::Constant(1e-12 * (1.0 + H.diagonal().maxCoeff()));
+        Eigen::LDLT<Matrix6d> ldlt(A);
+        if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
+          delta = ldlt.solve(-g);
+          if (delta.allFinite()) {
+            solved = true;
+            break;
+          }
+        }
+        lambda = lambda > 0 ? lambda * 10 : options.initial_damping;
+      }
+      if (!solved) break;
+      ++iterations;
+      const Pose T_new = applyLeftIncrement(T, delta);
+      std::vector<float> residuals_new = evaluateEdgeResiduals(points, T_new, level);
+      const double cost_old = robustCost(residuals, sigma, options.nu, trunc);
+      const double cost_new = robustCost(residuals_new, sigma, options.nu, trunc);
+      if (cost_new <= cost_old) {
+        T = T_new;
+        residuals = std::move(residuals_new);
+        lambda = lambda > options.initial_damping ? lambda * 0.1 : 0.0;
+        if (delta.norm() < options.min_step) break;
+      } else {
+        lambda = lambda > 0 ? lambda * 10 : options.initial_damping;
+        if (lambda > options.max_damping || delta.norm() < options.min_step) break;
+      }
+    }
+  }
+
+  // Quality and covariance on the finest level used.
+  const LiveLevel& finest = live.levels[options.finest_level];
+  const std::vector<EdgePoint>& points = pointsFor(options.finest_level);
+  TrackResult result;
+  result.T_camera_ref = T;
+  result.T_world_camera = reference.T_world_ref * T.inverse();
+  TrackQuality& q = result.quality;
+  q.iterations = iterations;
+  int inliers = 0;
+  double inlier_sum = 0;
+  std::vector<float> residuals(points.size(), kInvalidResidual);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const EdgePointEvaluation e = evaluateEdgePoint(points[i], T, finest, false);
+    const Eigen::Vector3d p = T * Eigen::Vector3d(points[i].x, points[i].y, points[i].z);
+    if (p.z() > 1e-6 && footprintInside(e.u, e.v, finest.field.distance.width, finest.field.distance.height)) {
+      ++q.points_in_image;
+    }
+    if (!e.valid) continue;
+    residuals[i] = static_cast<float>(e.residual);
+    ++q.points_used;
+    if (e.residual < options.inlier_threshold_px) {
+      ++inliers;
+      inlier_sum += e.residual;
+    }
+  }
+  q.inlier_ratio = q.points_in_image > 0 ? static_cast<double>(inliers) / q.points_in_image : 0.0;
+  auto spread = [&](const Pose& T_cr) {
+    Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+    Eigen::Vector2d sum2 = Eigen::Vector2d::Zero();
+    int n = 0;
+    for (const EdgePoint& point : points) {
+      const Eigen::Vector3d p = T_cr * Eigen::Vector3d(point.x, point.y, point.z);
+      if (!(p.z() > 1e-6)) continue;
+      const Eigen::Vector2d uv(finest.camera.fx * p.x() / p.z(), finest.camera.fy * p.y() / p.z());
+      sum += uv;
+      sum2 += uv.cwiseProduct(uv);
+      ++n;
+    }
+    if (n == 0) return 0.0;
+    const Eigen::Vector2d mean = sum / n;
+    return std::sqrt(std::max(0.0, (sum2 / n - mean.cwiseProduct(mean)).sum()));
+  };
+  const double spread_ref = spread(Pose::Identity());
+  q.spread_ratio = spread_ref > 0 ? spread(T) / spread_ref : 0.0;
+  size_t near_edge = 0;
+  for (float d : finest.field.distance.data) near_edge += d < options.inlier_threshold_px;
+  q.chance_inlier_ratio = static_cast<double>(near_edge) / static_cast<double>(finest.field.distance.data.size());
+  const double above_chance =
+      q.chance_inlier_ratio < 1.0 ? (q.inlier_ratio - q.chance_inlier_ratio) / (1.0 - q.chance_inlier_ratio) : 0.0;
+  q.visible_ratio = static_cast<double>(q.points_in_image) / static_cast<double>(points.size());
+  q.mean_residual_px = inliers > 0 ? inlier_sum / inliers : 0.0;
+  q.scale_px = estimateTDistributionScale(residuals, options.nu, options.scale_iterations);
+  const EdgeNormalEquations eq = accumulateEdgeNormalEquations(points, T, finest, q.scale_px, options.nu);
+  Matrix6d H;
+  Vector6d g;
+  unpackEdgeNormalEquations(eq, H, g);
+  Eigen::LDLT<Matrix6d> ldlt(H);
+  bool covariance_ok = false;
+  if (eq[kEdgeNormalCountIndex] >= 6 && ldlt.info() == Eigen::Success && ldlt.isPositive()) {
+    result.covariance = q.scale_px * q.scale_px * ldlt.solve(Matrix6d::Identity());
+    covariance_ok = result.covariance.allFinite();
+  }
+  const double correction = (T_camera_ref_guess.inverse() * T).translation().norm();
+  const bool ok = covariance_ok && isValidPose(result.T_world_camera) && q.points_in_image >= options.min_points &&
+                  inliers >= options.min_points && q.inlier_ratio >= options.min_inlier_ratio &&
+                  q.visible_ratio >= options.min_visible_ratio && q.spread_ratio * options.max_spread_change >= 1.0 &&
+                  q.spread_ratio <= options.max_spread_change &&
+                  above_chance >= options.min_inlier_ratio_above_chance &&
+                  q.mean_residual_px <= options.max_mean_residual_px && correction <= options.max_translation_m;
+  result.state = ok ? TrackingState::kTracking : TrackingState::kLost;
+  return result;
+}
+
+}  // namespace vkloc

@@ -1,0 +1,575 @@
+// CPU backend of the edge stages declared in edges.hpp.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "vkloc/edges.hpp"
+
+namespace vkloc {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+cv::Mat wrap(const ImageF32& image) {
+  return cv::Mat(image.height, image.width, CV_32FC(image.channels), const_cast<float*>(image.data.data()));
+}
+
+bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
+
+/// True when two depths (metres, > 0) are on the same surface: no discontinuity.
+bool continuous(float a, float b, double ratio) {
+  return std::abs(static_cast<double>(a) - b) <= ratio * std::min(a, b);
+}
+
+}  // namespace
+
+// --- edge detection --------------------------------------------------------------------------
+
+Status validateEdgeDetectorOptions(const EdgeDetectorOptions& o) {
+  if (!finiteIn(o.contrast_percentile, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge detector: contrast_percentile must be in 0..1");
+  }
+  if (!finiteIn(o.high_factor, 1e-6, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge detector: high_factor must be in 1e-6..1e6");
+  }
+  if (!finiteIn(o.low_ratio, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge detector: low_ratio must be in 0..1");
+  }
+  if (!finiteIn(o.min_high_gradient, 0.0, 1e9)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge detector: min_high_gradient must be >= 0 and finite");
+  }
+  return Status::success();
+}
+
+Result<ImageU8> detectEdges(const ImageF32& gray, const EdgeDetectorOptions& options) {
+  VKLOC_TRY_STATUS(validateEdgeDetectorOptions(options));
+  if (gray.empty() || gray.channels != 1 || gray.data.size() != static_cast<size_t>(gray.width) * gray.height) {
+    return makeError(ErrorCode::kInvalidArgument, "detectEdges: expected a non-empty single-channel image");
+  }
+  const int w = gray.width;
+  const int h = gray.height;
+  const cv::Mat src = wrap(gray);
+  cv::Mat gx, gy;
+  cv::Sobel(src, gx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
+  cv::Sobel(src, gy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
+  cv::Mat mag;
+  cv::magnitude(gx, gy, mag);
+
+  // Contrast: quantile of the magnitude over a 2x2-strided sample of the pixels.
+  std::vector<float> sample;
+  sample.reserve(static_cast<size_t>((w + 1) / 2) * ((h + 1) / 2));
+  for (int y = 0; y < h; y += 2) {
+    const float* row = mag.ptr<float>(y);
+    for (int x = 0; x < w; x += 2) sample.push_back(row[x]);
+  }
+  const size_t k = std::min(sample.size() - 1, static_cast<size_t>(options.contrast_percentile * (sample.size() - 1)));
+  std::nth_element(sample.begin(), sample.begin() + static_cast<std::ptrdiff_t>(k), sample.end());
+  const double contrast = sample[k];
+  const float high = static_cast<float>(std::max(options.high_factor * contrast, options.min_high_gradient));
+  const float low = static_cast<float>(options.low_ratio * high);
+
+  // Non-maximum suppression: 0 = suppressed, 1 = weak candidate, 2 = strong.
+  ImageU8 state(w, h, 1, 0);
+  const float tan22 = 0.41421356f;  // tan(22.5 deg)
+  for (int y = 1; y < h - 1; ++y) {
+    const float* m0 = mag.ptr<float>(y - 1);
+    const float* m1 = mag.ptr<float>(y);
+    const float* m2 = mag.ptr<float>(y + 1);
+    const float* dx = gx.ptr<float>(y);
+    const float* dy = gy.ptr<float>(y);
+    for (int x = 1; x < w - 1; ++x) {
+      const float m = m1[x];
+      if (m < low || m <= 0.0f) continue;
+      const float ax = std::abs(dx[x]);
+      const float ay = std::abs(dy[x]);
+      float a = 0, b = 0;
+      if (ay <= tan22 * ax) {
+        a = m1[x - 1];
+        b = m1[x + 1];
+      } else if (ax <= tan22 * ay) {
+        a = m0[x];
+        b = m2[x];
+      } else if ((dx[x] > 0) == (dy[x] > 0)) {
+        a = m0[x - 1];
+        b = m2[x + 1];
+      } else {
+        a = m0[x + 1];
+        b = m2[x - 1];
+      }
+      if (m >= a && m >= b && (m > a || m > b)) state.at(x, y) = m >= high ? 2 : 1;
+    }
+  }
+
+  // Hysteresis: grow from strong pixels through 8-connected weak ones.
+  ImageU8 edges(w, h, 1, 0);
+  std::vector<int> stack;
+  for (int i = 0; i < w * h; ++i) {
+    if (state.data[i] != 2) continue;
+    edges.data[i] = 255;
+    stack.push_back(i);
+    while (!stack.empty()) {
+      const int p = stack.back();
+      stack.pop_back();
+      const int px = p % w;
+      const int py = p / w;
+      for (int dy2 = -1; dy2 <= 1; ++dy2) {
+        for (int dx2 = -1; dx2 <= 1; ++dx2) {
+          const int qx = px + dx2;
+          const int qy = py + dy2;
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+          const int q = qy * w + qx;
+          if (state.data[q] == 0 || edges.data[q] != 0) continue;
+          edges.data[q] = 255;
+          stack.push_back(q);
+        }
+      }
+    }
+  }
+  return edges;
+}
+
+// --- pyramid and distance fields ---------------------------------------------------------------
+
+PinholeCamera pyramidCamera(const PinholeCamera& camera, int level) {
+  PinholeCamera c = camera;
+  for (int k = 0; k < level; ++k) {
+    c.fx *= 0.5;
+    c.fy *= 0.5;
+    c.cx = (c.cx + 0.5) * 0.5 - 0.5;
+    c.cy = (c.cy + 0.5) * 0.5 - 0.5;
+    c.width = (c.width + 1) / 2;
+    c.height = (c.height + 1) / 2;
+  }
+  return c;
+}
+
+ImageF32 toFloat(const ImageU8& gray) {
+  ImageF32 out(gray.width, gray.height, gray.channels);
+  for (size_t i = 0; i < gray.data.size(); ++i) out.data[i] = gray.data[i];
+  return out;
+}
+
+ImageF32 downsampleHalf(const ImageF32& image) {
+  const int w = image.width;
+  const int h = image.height;
+  const int ow = (w + 1) / 2;
+  const int oh = (h + 1) / 2;
+  if (w <= 0 || h <= 0 || image.channels != 1) return {};
+  auto clampi = [](int v, int n) { return std::min(std::max(v, 0), n - 1); };
+  constexpr float kTaps[4] = {1.0f / 8, 3.0f / 8, 3.0f / 8, 1.0f / 8};
+  // Horizontal pass into an ow x h buffer, then vertical.
+  ImageF32 tmp(ow, h, 1);
+  for (int y = 0; y < h; ++y) {
+    const float* row = &image.data[static_cast<size_t>(y) * w];
+    for (int x = 0; x < ow; ++x) {
+      float s = 0;
+      for (int t = 0; t < 4; ++t) s += kTaps[t] * row[clampi(2 * x - 1 + t, w)];
+      tmp.at(x, y) = s;
+    }
+  }
+  ImageF32 out(ow, oh, 1);
+  for (int y = 0; y < oh; ++y) {
+    const float* r[4];
+    for (int t = 0; t < 4; ++t) r[t] = &tmp.data[static_cast<size_t>(clampi(2 * y - 1 + t, h)) * ow];
+    for (int x = 0; x < ow; ++x) {
+      out.at(x, y) = kTaps[0] * r[0][x] + kTaps[1] * r[1][x] + kTaps[2] * r[2][x] + kTaps[3] * r[3][x];
+    }
+  }
+  return out;
+}
+
+Result<DistanceField> computeDistanceField(const ImageU8& edges, float truncation_px) {
+  if (edges.empty() || edges.channels != 1 || edges.data.size() != static_cast<size_t>(edges.width) * edges.height) {
+    return makeError(ErrorCode::kInvalidArgument, "computeDistanceField: expected a non-empty single-channel edge map");
+  }
+  if (!(truncation_px > 0) || !std::isfinite(truncation_px)) {
+    return makeError(ErrorCode::kInvalidArgument, "computeDistanceField: truncation_px must be > 0 and finite");
+  }
+  const int w = edges.width;
+  const int h = edges.height;
+  DistanceField field;
+  field.truncation_px = truncation_px;
+  field.distance = ImageF32(w, h, 1, truncation_px);
+  field.gradient = ImageF32(w, h, 2, 0.0f);
+  // distanceTransform measures the distance to the nearest zero pixel: edges become zeros.
+  cv::Mat inverted(h, w, CV_8U);
+  bool any_edge = false;
+  for (int y = 0; y < h; ++y) {
+    uint8_t* dst = inverted.ptr<uint8_t>(y);
+    const uint8_t* src = &edges.data[static_cast<size_t>(y) * w];
+    for (int x = 0; x < w; ++x) {
+      dst[x] = src[x] ? 0 : 255;
+      any_edge = any_edge || src[x];
+    }
+  }
+  if (!any_edge) return field;
+  cv::Mat dist(h, w, CV_32F, field.distance.data.data());
+  cv::distanceTransform(inverted, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
+  for (float& d : field.distance.data) d = std::min(d, truncation_px);
+
+  // Central differences inside, one-sided on the border; zero where a value used is truncated.
+  const ImageF32& D = field.distance;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      float g[2] = {0, 0};
+      for (int axis = 0; axis < 2; ++axis) {
+        const int n = axis == 0 ? w : h;
+        const int c = axis == 0 ? x : y;
+        if (n < 2) continue;
+        const int lo = std::max(c - 1, 0);
+        const int hi = std::min(c + 1, n - 1);
+        const float a = axis == 0 ? D.at(lo, y) : D.at(x, lo);
+        const float b = axis == 0 ? D.at(hi, y) : D.at(x, hi);
+        if (a >= truncation_px || b >= truncation_px || D.at(x, y) >= truncation_px) continue;
+        g[axis] = (b - a) / static_cast<float>(hi - lo);
+      }
+      field.gradient.at(x, y, 0) = g[0];
+      field.gradient.at(x, y, 1) = g[1];
+    }
+  }
+  return field;
+}
+
+Result<LiveFrame> buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const LiveFrameOptions& options) {
+  VKLOC_TRY_STATUS(validateCamera(camera));
+  VKLOC_TRY_STATUS(validateEdgeDetectorOptions(options.detector));
+  if (options.levels < 1 || options.levels > 8) {
+    return makeError(ErrorCode::kInvalidArgument, "buildLiveFrame: levels must be in 1..8");
+  }
+  if (gray.channels != 1 || gray.width != camera.width || gray.height != camera.height ||
+      gray.data.size() != static_cast<size_t>(gray.width) * gray.height) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("buildLiveFrame: image is {}x{}x{}, camera expects {}x{} single-channel", gray.width,
+                                 gray.height, gray.channels, camera.width, camera.height));
+  }
+  LiveFrame frame;
+  ImageF32 level_gray = toFloat(gray);
+  for (int level = 0; level < options.levels; ++level) {
+    if (level > 0) {
+      if (level_gray.width < 16 || level_gray.height < 16) break;
+      level_gray = downsampleHalf(level_gray);
+    }
+    LiveLevel out;
+    out.camera = pyramidCamera(camera, level);
+    auto edges = detectEdges(level_gray, options.detector);
+    if (!edges.ok()) return edges.error();
+    auto field = computeDistanceField(*edges, options.truncation_px);
+    if (!field.ok()) return field.error();
+    out.field = std::move(field).value();
+    if (options.keep_intermediate) {
+      out.gray = level_gray;
+      out.edges = std::move(edges).value();
+    }
+    frame.levels.push_back(std::move(out));
+  }
+  return frame;
+}
+
+// --- reference edges ----------------------------------------------------------------------------
+
+Status validateReferenceEdgeOptions(const ReferenceEdgeOptions& o) {
+  VKLOC_TRY_STATUS(validateEdgeDetectorOptions(o.detector));
+  if (!finiteIn(o.depth_jump_ratio, 1e-6, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: depth_jump_ratio must be in 1e-6..1e6");
+  }
+  if (!finiteIn(o.crease_angle_deg, 0.0, 180.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: crease_angle_deg must be in 0..180");
+  }
+  if (o.cell_px < 1 || o.cell_px > 4096) {
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: cell_px must be in 1..4096");
+  }
+  if (o.max_points_per_cell < 1) {
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: max_points_per_cell must be >= 1");
+  }
+  if (o.max_points < 1) return makeError(ErrorCode::kInvalidArgument, "reference edges: max_points must be >= 1");
+  if (o.levels < 1 || o.levels > 8)
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: levels must be in 1..8");
+  return Status::success();
+}
+
+namespace {
+
+/// The reference view at one pyramid level: gray (0..255), depth (m), normals (3 channels).
+struct ReferenceLevel {
+  ImageF32 gray;
+  ImageF32 depth;
+  ImageF32 normals;
+};
+
+/// Halves a reference level: gray as the live pyramid (downsampleHalf), depth and normals of
+/// the nearest surface among the 2x2 input pixels an output pixel covers.
+ReferenceLevel downsampleReference(const ReferenceLevel& in) {
+  ReferenceLevel out;
+  out.gray = downsampleHalf(in.gray);
+  const int w = out.gray.width;
+  const int h = out.gray.height;
+  out.depth = ImageF32(w, h, 1, 0.0f);
+  const bool normals = in.normals.channels == 3 && in.normals.width == in.depth.width;
+  if (normals) out.normals = ImageF32(w, h, 3, 0.0f);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      float best = 0;
+      int bx = -1, by = -1;
+      for (int dy = 0; dy < 2; ++dy) {
+        for (int dx = 0; dx < 2; ++dx) {
+          const int sx = std::min(2 * x + dx, in.depth.width - 1);
+          const int sy = std::min(2 * y + dy, in.depth.height - 1);
+          const float z = in.depth.at(sx, sy);
+          if (z > 0 && std::isfinite(z) && (best == 0 || z < best)) {
+            best = z;
+            bx = sx;
+            by = sy;
+          }
+        }
+      }
+      out.depth.at(x, y) = best;
+      if (normals && bx >= 0) {
+        for (int c = 0; c < 3; ++c) out.normals.at(x, y, c) = in.normals.at(bx, by, c);
+      }
+    }
+  }
+  return out;
+}
+
+Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const ReferenceEdgeOptions& options) {
+  const int w = view.depth.width;
+  const int h = view.depth.height;
+  const bool have_normals =
+      !view.normals.empty() && view.normals.width == w && view.normals.height == h && view.normals.channels == 3;
+  ImageU8 flags(w, h, 1, 0);
+  const double ratio = options.depth_jump_ratio;
+  const float cos_crease = static_cast<float>(std::cos(options.crease_angle_deg * kPi / 180.0));
+  const ImageF32& D = view.depth;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const float zp = D.at(x, y);
+      for (int dir = 0; dir < 2; ++dir) {  // 0: right neighbour, 1: neighbour below
+        const int qx = x + (dir == 0);
+        const int qy = y + (dir == 1);
+        if (qx >= w || qy >= h) continue;
+        const float zq = D.at(qx, qy);
+        const bool sp = zp > 0 && std::isfinite(zp);
+        const bool sq = zq > 0 && std::isfinite(zq);
+        if (!sp && !sq) continue;
+        const uint8_t to_q = dir == 0 ? kEdgePixelOcclusionRight : kEdgePixelOcclusionDown;
+        const uint8_t to_p = dir == 0 ? kEdgePixelOcclusionLeft : kEdgePixelOcclusionUp;
+        if (sp != sq || !continuous(zp, zq, ratio)) {
+          if (options.occlusion_edges) {
+            // Background counts as infinitely far: the flag goes on the surface pixel.
+            if (sp && (!sq || zp < zq)) {
+              flags.at(x, y) |= to_q;
+            } else {
+              flags.at(qx, qy) |= to_p;
+            }
+          }
+          continue;
+        }
+        if (options.crease_edges && have_normals) {
+          float dot = 0;
+          for (int c = 0; c < 3; ++c) dot += view.normals.at(x, y, c) * view.normals.at(qx, qy, c);
+          if (dot < cos_crease) flags.at(x, y) |= dir == 0 ? kEdgePixelCreaseRight : kEdgePixelCreaseDown;
+        }
+      }
+    }
+  }
+  if (options.texture_edges) {
+    auto edges = detectEdges(view.gray, options.detector);
+    if (!edges.ok()) return edges.error();
+    // A geometric edge that shows in the gray image is represented by its texture edge pixels
+    // (found by the same detector as the live image's edges, so both place it alike); the
+    // geometric flags next to such pixels are dropped.
+    ImageU8 geometric = flags;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        if (!edges->at(x, y)) continue;
+        bool has_surface = D.at(x, y) > 0;
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int nx = x + dx;
+            const int ny = y + dy;
+            if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+            has_surface = has_surface || geometric.at(nx, ny) != 0;
+            flags.at(nx, ny) &= kEdgePixelTexture;
+          }
+        }
+        if (has_surface) flags.at(x, y) |= kEdgePixelTexture;
+      }
+    }
+  }
+  return flags;
+}
+
+}  // namespace
+
+Result<ImageU8> detectReferenceEdges(const RenderOutput& view, const ReferenceEdgeOptions& options) {
+  VKLOC_TRY_STATUS(validateReferenceEdgeOptions(options));
+  if (view.depth.empty() || view.depth.channels != 1 || view.gray.width != view.depth.width ||
+      view.gray.height != view.depth.height || view.gray.channels != 1 || view.gray.empty()) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "detectReferenceEdges: view needs a gray image and a depth image of the same size");
+  }
+  return detectReferenceEdgesImpl(ReferenceLevel{toFloat(view.gray), view.depth, view.normals}, options);
+}
+
+std::vector<EdgePoint> backProjectEdges(const ImageU8& flags, const ImageF32& depth, const PinholeCamera& camera,
+                                        const ReferenceEdgeOptions& options) {
+  std::vector<EdgePoint> points;
+  const int w = flags.width;
+  const int h = flags.height;
+  if (depth.width != w || depth.height != h || depth.channels != 1 || flags.channels != 1) return points;
+  const double ratio = options.depth_jump_ratio;
+  auto depthAt = [&](int x, int y) -> float {
+    if (x < 0 || y < 0 || x >= w || y >= h) return 0.0f;
+    const float z = depth.at(x, y);
+    return std::isfinite(z) && z > 0 ? z : 0.0f;
+  };
+  auto emit = [&](double u, double v, double z, uint32_t kind) {
+    // Eq. 3: P = pi^-1(u, Z) with metric depth Z (camera z).
+    EdgePoint p;
+    p.x = static_cast<float>(z * (u - camera.cx) / camera.fx);
+    p.y = static_cast<float>(z * (v - camera.cy) / camera.fy);
+    p.z = static_cast<float>(z);
+    p.kind = kind;
+    points.push_back(p);
+  };
+  struct Dir {
+    uint8_t flag;
+    int dx, dy;
+  };
+  constexpr Dir kOcclusion[4] = {{kEdgePixelOcclusionRight, 1, 0},
+                                 {kEdgePixelOcclusionLeft, -1, 0},
+                                 {kEdgePixelOcclusionDown, 0, 1},
+                                 {kEdgePixelOcclusionUp, 0, -1}};
+  constexpr Dir kCrease[2] = {{kEdgePixelCreaseRight, 1, 0}, {kEdgePixelCreaseDown, 0, 1}};
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const uint8_t f = flags.at(x, y);
+      if (!f) continue;
+      const float zp = depthAt(x, y);
+      if (f & kEdgePixelTexture) {
+        // On or next to a depth jump the edge belongs to the near surface: take the smallest
+        // depth of the pixel and its 8-neighbours that are on the near side of a jump.
+        float z = zp;
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            const float zn = depthAt(x + dx, y + dy);
+            if (zn <= 0 || (zp > 0 && continuous(zp, zn, ratio))) continue;
+            if (zp > 0 && zn > zp) continue;
+            if (z <= 0 || zn < z) z = zn;
+          }
+        }
+        if (z > 0) emit(x, y, z, kEdgeTexture);
+      }
+      if (zp <= 0) continue;
+      for (const Dir& d : kOcclusion) {
+        if (!(f & d.flag)) continue;
+        // Near surface extrapolated half a pixel towards the jump when the pixel behind is
+        // on the same surface.
+        const float zb = depthAt(x - d.dx, y - d.dy);
+        double z = zp;
+        if (zb > 0 && continuous(zp, zb, ratio)) z = zp + 0.5 * (static_cast<double>(zp) - zb);
+        if (!(z > 0)) z = zp;
+        emit(x + 0.5 * d.dx, y + 0.5 * d.dy, z, kEdgeOcclusion);
+      }
+      for (const Dir& d : kCrease) {
+        if (!(f & d.flag)) continue;
+        const float zq = depthAt(x + d.dx, y + d.dy);
+        if (zq <= 0) continue;
+        emit(x + 0.5 * d.dx, y + 0.5 * d.dy, 0.5 * (static_cast<double>(zp) + zq), kEdgeCrease);
+      }
+    }
+  }
+  return points;
+}
+
+std::vector<EdgePoint> subsampleEdgePoints(const std::vector<EdgePoint>& points, const PinholeCamera& camera,
+                                           const ReferenceEdgeOptions& options) {
+  const int cell = std::max(options.cell_px, 1);
+  const int cells_x = std::max(1, (camera.width + cell - 1) / cell);
+  const int cells_y = std::max(1, (camera.height + cell - 1) / cell);
+  const size_t budget = static_cast<size_t>(std::max(options.max_points, 1));
+  if (points.size() <= budget && options.max_points_per_cell >= static_cast<int>(points.size())) return points;
+  // Bucket the point indices by cell, keeping input order inside a cell.
+  std::vector<std::vector<uint32_t>> buckets(static_cast<size_t>(cells_x) * cells_y);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const EdgePoint& p = points[i];
+    if (!(p.z > 0)) continue;
+    const double u = camera.fx * p.x / p.z + camera.cx;
+    const double v = camera.fy * p.y / p.z + camera.cy;
+    const int cx = std::clamp(static_cast<int>(std::floor((u + 0.5) / cell)), 0, cells_x - 1);
+    const int cy = std::clamp(static_cast<int>(std::floor((v + 0.5) / cell)), 0, cells_y - 1);
+    buckets[static_cast<size_t>(cy) * cells_x + cx].push_back(static_cast<uint32_t>(i));
+  }
+  auto totalFor = [&](size_t k) {
+    size_t total = 0;
+    for (const auto& b : buckets) total += std::min(b.size(), k);
+    return total;
+  };
+  size_t k = static_cast<size_t>(std::max(options.max_points_per_cell, 1));
+  while (k > 1 && totalFor(k) > budget) --k;
+  std::vector<uint8_t> keep(points.size(), 0);
+  for (const auto& b : buckets) {
+    const size_t n = b.size();
+    const size_t take = std::min(n, k);
+    for (size_t j = 0; j < take; ++j) keep[b[(j * n + n / 2) / take]] = 1;
+  }
+  std::vector<EdgePoint> out;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (keep[i]) out.push_back(points[i]);
+  }
+  if (out.size() > budget) {
+    // Even one point per cell is too many: keep evenly spaced points of the list.
+    std::vector<EdgePoint> thinned;
+    thinned.reserve(budget);
+    for (size_t j = 0; j < budget; ++j) thinned.push_back(out[(j * out.size() + out.size() / 2) / budget]);
+    out = std::move(thinned);
+  }
+  return out;
+}
+
+Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const PinholeCamera& camera, const Pose& T_world_ref,
+                                         const ReferenceEdgeOptions& options) {
+  VKLOC_TRY_STATUS(validateCamera(camera));
+  if (!isValidPose(T_world_ref)) {
+    return makeError(ErrorCode::kInvalidArgument, "buildEdgeReference: T_world_ref is not a valid rigid transform");
+  }
+  if (view.depth.width != camera.width || view.depth.height != camera.height) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("buildEdgeReference: view is {}x{}, camera expects {}x{}", view.depth.width,
+                                 view.depth.height, camera.width, camera.height));
+  }
+  VKLOC_TRY_STATUS(validateReferenceEdgeOptions(options));
+  if (options.levels < 1 || options.levels > 8) {
+    return makeError(ErrorCode::kInvalidArgument, "buildEdgeReference: levels must be in 1..8");
+  }
+  if (view.gray.width != camera.width || view.gray.height != camera.height || view.gray.channels != 1 ||
+      view.depth.channels != 1) {
+    return makeError(ErrorCode::kInvalidArgument, "buildEdgeReference: view needs gray and depth of the camera's size");
+  }
+  EdgeReference ref;
+  ref.camera = camera;
+  ref.T_world_ref = T_world_ref;
+  ReferenceLevel level{toFloat(view.gray), view.depth, view.normals};
+  for (int k = 0; k < options.levels; ++k) {
+    if (k > 0) {
+      if (level.depth.width < 16 || level.depth.height < 16) break;
+      level = downsampleReference(level);
+    }
+    const PinholeCamera level_camera = pyramidCamera(camera, k);
+    auto flags = detectReferenceEdgesImpl(level, options);
+    if (!flags.ok()) return flags.error();
+    std::vector<EdgePoint> points =
+        subsampleEdgePoints(backProjectEdges(*flags, level.depth, level_camera, options), level_camera, options);
+    if (k == 0) {
+      ref.points = std::move(points);
+    } else {
+      ref.coarse_points.push_back(std::move(points));
+    }
+  }
+  return ref;
+}
+
+}  // namespace vkloc

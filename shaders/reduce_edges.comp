@@ -1,0 +1,108 @@
+#version 450
+// Edge alignment per reference point (evaluateEdgePoint in host/src/edge_tracker.cpp):
+// p = T_camera_ref P, (u, v) = (fx x / z + cx, fy y / z + cy); valid when z > 1e-6 m, the 2x2
+// bilinear footprint lies inside the image and none of its four distances is truncated;
+// r = bilinear distance, J = [G_u G_v] [fx/z 0 -fx x/z^2; 0 fy/z -fy y/z^2] [I | -hat(p)].
+// kMode 0: writes r per point (-1 when invalid). kMode 1: accumulates the 29 normal-equation
+// values (edge_tracker.hpp layout) with t-distribution weights w = (nu + 1) / (nu + (r/sigma)^2)
+// in vec4 accumulators, reduced by subgroupAdd and per workgroup into PARTIALS[group * 8 + k].
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#include "edge_layout.h"
+
+layout(constant_id = 0) const int kMode = 0;
+layout(local_size_x = 64) in;
+layout(push_constant) uniform Push { EdgePush pc; };
+layout(set = 0, binding = EDGE_BINDING_DISTANCE, r32f) readonly uniform image2D distance_px;
+layout(set = 0, binding = EDGE_BINDING_DGRAD, rg32f) readonly uniform image2D dgrad;
+layout(std430, set = 0, binding = EDGE_BINDING_POINTS) readonly buffer Points { vec4 points[]; };
+layout(std430, set = 0, binding = EDGE_BINDING_RESIDUALS) writeonly buffer Residuals { float residuals[]; };
+layout(std430, set = 0, binding = EDGE_BINDING_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
+
+shared vec4 subgroup_sums[64][EDGE_REDUCE_VEC4S];
+
+void main() {
+  uint stride = 64u * pc.group_count;
+  vec4 a0 = vec4(0), a1 = vec4(0), a2 = vec4(0), a3 = vec4(0);
+  vec4 a4 = vec4(0), a5 = vec4(0), a6 = vec4(0), a7 = vec4(0);
+  float fx = pc.intrinsics.x, fy = pc.intrinsics.y, cx = pc.intrinsics.z, cy = pc.intrinsics.w;
+  float trunc = pc.truncation_px;
+  for (uint i = gl_GlobalInvocationID.x; i < pc.point_count; i += stride) {
+    vec4 P = vec4(points[i].xyz, 1.0);
+    vec3 p = vec3(dot(pc.pose_row0, P), dot(pc.pose_row1, P), dot(pc.pose_row2, P));
+    bool valid = p.z > 1e-6;
+    float r = -1.0;
+    float iz = 0.0, u = 0.0, v = 0.0;
+    if (valid) {
+      iz = 1.0 / p.z;
+      u = fx * p.x * iz + cx;
+      v = fy * p.y * iz + cy;
+      valid = u >= 0.0 && v >= 0.0 && u < float(pc.width - 1) && v < float(pc.height - 1);
+    }
+    ivec2 q = ivec2(0);
+    float w00 = 0.0, w10 = 0.0, w01 = 0.0, w11 = 0.0;
+    if (valid) {
+      q = ivec2(int(u), int(v));
+      float a = u - float(q.x), b = v - float(q.y);
+      float d00 = imageLoad(distance_px, q).x;
+      float d10 = imageLoad(distance_px, q + ivec2(1, 0)).x;
+      float d01 = imageLoad(distance_px, q + ivec2(0, 1)).x;
+      float d11 = imageLoad(distance_px, q + ivec2(1, 1)).x;
+      valid = !(d00 >= trunc || d10 >= trunc || d01 >= trunc || d11 >= trunc);
+      w00 = (1.0 - a) * (1.0 - b);
+      w10 = a * (1.0 - b);
+      w01 = (1.0 - a) * b;
+      w11 = a * b;
+      if (valid) r = w00 * d00 + w10 * d10 + w01 * d01 + w11 * d11;
+    }
+    if (kMode == 0) {
+      residuals[i] = r;
+      continue;
+    }
+    if (!valid) continue;
+    vec2 g = w00 * imageLoad(dgrad, q).xy + w10 * imageLoad(dgrad, q + ivec2(1, 0)).xy +
+             w01 * imageLoad(dgrad, q + ivec2(0, 1)).xy + w11 * imageLoad(dgrad, q + ivec2(1, 1)).xy;
+    float ga = g.x * fx * iz;
+    float gb = g.y * fy * iz;
+    vec3 jt = vec3(ga, gb, -(ga * p.x + gb * p.y) * iz);
+    vec3 jr = cross(p, jt);
+    float s = r / pc.robust.x;
+    float w = (pc.robust.y + 1.0) / (pc.robust.y + s * s);
+    vec3 wt = w * jt;
+    vec3 wr = w * jr;
+    a0 += wt.x * vec4(jt, jr.x);
+    a1 += vec4(wt.x * jr.y, wt.x * jr.z, wt.y * jt.y, wt.y * jt.z);
+    a2 += vec4(wt.y * jr.x, wt.y * jr.y, wt.y * jr.z, wt.z * jt.z);
+    a3 += vec4(wt.z * jr.x, wt.z * jr.y, wt.z * jr.z, wr.x * jr.x);
+    a4 += vec4(wr.x * jr.y, wr.x * jr.z, wr.y * jr.y, wr.y * jr.z);
+    a5 += vec4(wr.z * jr.z, wt.x * r, wt.y * r, wt.z * r);
+    a6 += vec4(wr.x * r, wr.y * r, wr.z * r, w * r * r);
+    a7.x += 1.0;
+  }
+  if (kMode == 0) return;
+  a0 = subgroupAdd(a0);
+  a1 = subgroupAdd(a1);
+  a2 = subgroupAdd(a2);
+  a3 = subgroupAdd(a3);
+  a4 = subgroupAdd(a4);
+  a5 = subgroupAdd(a5);
+  a6 = subgroupAdd(a6);
+  a7 = subgroupAdd(a7);
+  if (subgroupElect()) {
+    subgroup_sums[gl_SubgroupID][0] = a0;
+    subgroup_sums[gl_SubgroupID][1] = a1;
+    subgroup_sums[gl_SubgroupID][2] = a2;
+    subgroup_sums[gl_SubgroupID][3] = a3;
+    subgroup_sums[gl_SubgroupID][4] = a4;
+    subgroup_sums[gl_SubgroupID][5] = a5;
+    subgroup_sums[gl_SubgroupID][6] = a6;
+    subgroup_sums[gl_SubgroupID][7] = a7;
+  }
+  barrier();
+  if (gl_LocalInvocationIndex < EDGE_REDUCE_VEC4S) {
+    uint k = gl_LocalInvocationIndex;
+    vec4 sum = vec4(0);
+    for (uint s = 0u; s < gl_NumSubgroups; ++s) sum += subgroup_sums[s][k];
+    partials[gl_WorkGroupID.x * EDGE_REDUCE_VEC4S + k] = sum;
+  }
+}

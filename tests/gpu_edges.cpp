@@ -1,0 +1,392 @@
+// GPU edge stages (GpuEdgeStages) against the CPU backend (edges.hpp, edge_tracker.hpp).
+#include "vkloc/gpu_edges.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "gpu_test_support.hpp"
+#include "vkloc/demo.hpp"
+
+namespace vkloc::test {
+namespace {
+
+PinholeCamera qvga() { return PinholeCamera{260.0, 262.0, 159.5, 119.5, 320, 240}; }
+
+/// Seeded test image: random rectangles and discs of random gray levels on a gradient
+/// background, plus uniform noise of +-noise gray levels.
+ImageU8 randomImage(int w, int h, unsigned seed, int noise = 3) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::vector<double> value(static_cast<size_t>(w) * h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) value[static_cast<size_t>(y) * w + x] = 60.0 + 60.0 * x / w + 20.0 * y / h;
+  }
+  for (int s = 0; s < 25; ++s) {
+    const double cx = U(rng) * w, cy = U(rng) * h, r = 8 + U(rng) * w / 6.0, g = 20 + U(rng) * 215;
+    const bool disc = U(rng) < 0.5;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const double dx = x - cx, dy = y - cy;
+        const bool inside = disc ? dx * dx + dy * dy < r * r : std::abs(dx) < r && std::abs(dy) < 0.6 * r;
+        if (inside) value[static_cast<size_t>(y) * w + x] = g;
+      }
+    }
+  }
+  std::uniform_int_distribution<int> N(-noise, noise);
+  ImageU8 out(w, h, 1);
+  for (size_t i = 0; i < value.size(); ++i)
+    out.data[i] = static_cast<uint8_t>(std::clamp(value[i] + N(rng), 0.0, 255.0));
+  return out;
+}
+
+double maxAbsDiff(const ImageF32& a, const ImageF32& b) {
+  if (a.data.size() != b.data.size()) return 1e30;
+  double m = 0;
+  for (size_t i = 0; i < a.data.size(); ++i) m = std::max(m, std::abs(static_cast<double>(a.data[i]) - b.data[i]));
+  return m;
+}
+
+int differingPixels(const ImageU8& a, const ImageU8& b) {
+  if (a.data.size() != b.data.size()) return 1 << 30;
+  int n = 0;
+  for (size_t i = 0; i < a.data.size(); ++i) n += (a.data[i] != 0) != (b.data[i] != 0);
+  return n;
+}
+
+class GpuEdges : public GpuTest {
+ protected:
+  std::unique_ptr<GpuEdgeStages> makeStages(const PinholeCamera& camera, const LiveFrameOptions& options = {}) {
+    auto stages = GpuEdgeStages::create(context_, camera, options);
+    EXPECT_TRUE(stages.ok()) << (stages.ok() ? "" : stages.error().message);
+    return stages.ok() ? std::move(*stages) : nullptr;
+  }
+
+  /// GPU live frame vs CPU: pyramid within 1e-3 gray levels, edge maps equal except <= 0.1 %
+  /// of the pixels (NMS ties decided by float rounding), distance field vs the exact CPU EDT of
+  /// the GPU's own edge map: <= 0.01 % pixels off by > 0.05 px, max error <= 0.5 px; gradients
+  /// within 1e-3 except <= 0.1 % pixels (next to a JFA miss).
+  void compareLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const LiveFrameOptions& options) {
+    auto stages = makeStages(camera, options);
+    ASSERT_TRUE(stages);
+    ASSERT_TRUE(stages->processLiveImage(gray).ok());
+    auto gpu = stages->readLiveFrame();
+    ASSERT_TRUE(gpu.ok()) << gpu.error().message;
+    auto cpu = buildLiveFrame(gray, camera, options);
+    ASSERT_TRUE(cpu.ok()) << cpu.error().message;
+    ASSERT_EQ(gpu->levels.size(), cpu->levels.size());
+    for (size_t k = 0; k < cpu->levels.size(); ++k) {
+      SCOPED_TRACE(::testing::Message() << "level " << k);
+      const LiveLevel& g = gpu->levels[k];
+      const LiveLevel& c = cpu->levels[k];
+      EXPECT_EQ(g.camera.width, c.camera.width);
+      EXPECT_DOUBLE_EQ(g.camera.cx, c.camera.cx);
+      EXPECT_LE(maxAbsDiff(g.gray, c.gray), 1e-3);
+      const int n = c.camera.width * c.camera.height;
+      int edge_pixels = 0;
+      for (uint8_t e : c.edges.data) edge_pixels += e != 0;
+      EXPECT_GT(edge_pixels, n / 200) << "test image has too few edges to be meaningful";
+      EXPECT_LE(differingPixels(g.edges, c.edges), n / 1000) << "of " << edge_pixels << " edge pixels";
+
+      auto exact = computeDistanceField(g.edges, options.truncation_px);
+      ASSERT_TRUE(exact.ok());
+      int off = 0, grad_off = 0;
+      double worst = 0;
+      for (int i = 0; i < n; ++i) {
+        const double e = std::abs(g.field.distance.data[i] - exact->distance.data[i]);
+        off += e > 0.05;
+        worst = std::max(worst, e);
+        const double eg = std::max(std::abs(g.field.gradient.data[2 * i] - exact->gradient.data[2 * i]),
+                                   std::abs(g.field.gradient.data[2 * i + 1] - exact->gradient.data[2 * i + 1]));
+        grad_off += eg > 1e-3;
+      }
+      EXPECT_LE(off, n / 10000) << "pixels off by > 0.05 px";
+      EXPECT_LE(worst, 0.5);
+      EXPECT_LE(grad_off, n / 1000);
+    }
+  }
+};
+
+TEST_F(GpuEdges, LiveFrameMatchesCpuOnSeededImages) {
+  LiveFrameOptions options;
+  options.levels = 3;
+  for (unsigned seed : {1u, 2u}) {
+    SCOPED_TRACE(::testing::Message() << "seed " << seed);
+    compareLiveFrame(randomImage(320, 240, seed), qvga(), options);
+  }
+}
+
+TEST_F(GpuEdges, LiveFrameMatchesCpuWithOddSizeAndOtherOptions) {
+  // Odd sizes exercise the (w + 1) / 2 pyramid and border replication; a low percentile and a
+  // small truncation exercise the radix select and a short jump-flooding schedule.
+  LiveFrameOptions options;
+  options.levels = 2;
+  options.truncation_px = 5.0f;
+  options.detector.contrast_percentile = 0.5;
+  options.detector.high_factor = 3.0;
+  options.detector.low_ratio = 0.5;
+  const PinholeCamera camera{200.0, 200.0, 100.0, 70.0, 201, 143};
+  compareLiveFrame(randomImage(201, 143, 7, 6), camera, options);
+}
+
+TEST_F(GpuEdges, LiveFrameMatchesCpuOnRenderedDemoView) {
+  auto model = makeDemoModel("city");
+  ASSERT_TRUE(model.ok());
+  auto renderer = GpuRenderer::create(context_, *model);
+  ASSERT_TRUE(renderer.ok()) << renderer.error().message;
+  const auto views = demoViewpoints("city");
+  ASSERT_FALSE(views.empty());
+  auto view = (*renderer)->render(qvga(), views.front());
+  ASSERT_TRUE(view.ok()) << view.error().message;
+  LiveFrameOptions options;
+  options.levels = 2;
+  compareLiveFrame(view->gray, qvga(), options);
+}
+
+TEST_F(GpuEdges, HysteresisFollowsLongWeakChainsToTheFixedPoint) {
+  // A serpentine band (weak step edges, contrast 30: magnitude 15) of 8 rows with a short
+  // strong piece (contrast 120) at one end: every weak pixel of the snake's outline is
+  // 8-connected to the strong piece through thousands of weak pixels. Exact arithmetic: the
+  // GPU edge map must equal the CPU's bit for bit.
+  const int w = 160, h = 120;
+  ImageU8 gray(w, h, 1, 100);
+  for (int band = 0; band < 7; ++band) {
+    const int y0 = 8 + band * 15;
+    for (int y = y0; y < y0 + 8; ++y) {
+      for (int x = 10; x < 150; ++x) gray.at(x, y) = 130;
+    }
+    if (band < 6) {  // connector to the next band, alternating sides
+      const int x0 = band % 2 == 0 ? 142 : 10;
+      for (int y = y0 + 8; y < y0 + 15; ++y) {
+        for (int x = x0; x < x0 + 8; ++x) gray.at(x, y) = 130;
+      }
+    }
+  }
+  for (int y = 8; y < 16; ++y) {
+    for (int x = 10; x < 20; ++x) gray.at(x, y) = 220;
+  }
+  LiveFrameOptions options;
+  options.levels = 1;
+  options.detector.contrast_percentile = 0.0;
+  options.detector.min_high_gradient = 20.0;
+  const PinholeCamera camera{150.0, 150.0, 79.5, 59.5, w, h};
+  auto stages = makeStages(camera, options);
+  ASSERT_TRUE(stages);
+  ASSERT_TRUE(stages->processLiveImage(gray).ok());
+  auto gpu = stages->readLiveFrame();
+  ASSERT_TRUE(gpu.ok());
+  auto cpu = detectEdges(toFloat(gray), options.detector);
+  ASSERT_TRUE(cpu.ok());
+  int edges = 0;
+  for (uint8_t e : cpu->data) edges += e != 0;
+  EXPECT_GT(edges, 2000);
+  EXPECT_EQ(differingPixels(gpu->levels[0].edges, *cpu), 0);
+  EXPECT_LT(stages->lastHysteresisPasses()[0], 64) << "hysteresis did not reach its fixed point";
+}
+
+/// Points near the live edges of `level` (within 4 px, projections at least 3 px inside the
+/// image) back-projected at depths 2..6 m into the reference camera = the live camera at
+/// T_camera_ref^-1.
+std::vector<EdgePoint> pointsNearEdges(const LiveLevel& level, const Pose& T_camera_ref, int count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> X(3, level.camera.width - 4), Y(3, level.camera.height - 4);
+  std::uniform_real_distribution<double> Z(2.0, 6.0), J(-0.3, 0.3);
+  const Pose T_ref_camera = T_camera_ref.inverse();
+  std::vector<EdgePoint> points;
+  while (static_cast<int>(points.size()) < count) {
+    const int x = X(rng), y = Y(rng);
+    if (level.field.distance.at(x, y) > 4.0f) continue;
+    const double u = x + J(rng), v = y + J(rng), z = Z(rng);
+    const PinholeCamera& c = level.camera;
+    const Eigen::Vector3d p_ref = T_ref_camera * Eigen::Vector3d(z * (u - c.cx) / c.fx, z * (v - c.cy) / c.fy, z);
+    points.push_back(EdgePoint{static_cast<float>(p_ref.x()), static_cast<float>(p_ref.y()),
+                               static_cast<float>(p_ref.z()), kEdgeTexture});
+  }
+  return points;
+}
+
+TEST_F(GpuEdges, ResidualsAndNormalEquationsMatchCpuOnTheSameField) {
+  LiveFrameOptions options;
+  options.levels = 2;
+  auto stages = makeStages(qvga(), options);
+  ASSERT_TRUE(stages);
+  ASSERT_TRUE(stages->processLiveImage(randomImage(320, 240, 3)).ok());
+  auto live = stages->readLiveFrame();
+  ASSERT_TRUE(live.ok());
+  const Pose T_camera_ref = expSE3((Vector6d() << 0.05, -0.03, 0.1, 0.01, -0.02, 0.015).finished());
+  // The pose the points were made with differs from the evaluated pose by a small motion, so
+  // residuals are spread over 0..truncation and the gradient g is far from zero.
+  const Pose T_eval =
+      applyLeftIncrement(T_camera_ref, (Vector6d() << 0.01, 0.004, -0.01, 0.002, 0.001, -0.003).finished());
+  for (int level = 0; level < 2; ++level) {
+    SCOPED_TRACE(::testing::Message() << "level " << level);
+    const LiveLevel& L = live->levels[level];
+    const std::vector<EdgePoint> points = pointsNearEdges(L, T_camera_ref, 3000, 11 + level);
+    ASSERT_TRUE(stages->setReference(points).ok());
+
+    // Residual pass: same validity, residuals equal to float projection accuracy (2e-4 px:
+    // (u, v) in float carry ~5e-5 px, times |grad d| <= ~1.5).
+    auto gpu_r = stages->residuals(T_eval, level);
+    ASSERT_TRUE(gpu_r.ok()) << gpu_r.error().message;
+    const std::vector<float> cpu_r = evaluateEdgeResiduals(points, T_eval, L);
+    ASSERT_EQ(gpu_r->size(), cpu_r.size());
+    int valid = 0, mismatched = 0;
+    double worst = 0;
+    for (size_t i = 0; i < cpu_r.size(); ++i) {
+      const bool a = (*gpu_r)[i] >= 0, b = cpu_r[i] >= 0;
+      mismatched += a != b;
+      if (a && b) {
+        ++valid;
+        worst = std::max(worst, std::abs(static_cast<double>((*gpu_r)[i]) - cpu_r[i]));
+      }
+    }
+    EXPECT_GT(valid, 2500);
+    EXPECT_EQ(mismatched, 0);
+    EXPECT_LE(worst, 2e-4);
+
+    // Normal equations: every value within 1e-4 of the sum of the absolute per-point
+    // contributions (the scale float accumulation errors are relative to), count exact.
+    const double sigma = 1.3, nu = 5.0;
+    auto gpu_eq = stages->accumulate(T_eval, level, sigma, nu);
+    ASSERT_TRUE(gpu_eq.ok()) << gpu_eq.error().message;
+    const EdgeNormalEquations cpu_eq = accumulateEdgeNormalEquations(points, T_eval, L, sigma, nu);
+    EdgeNormalEquations scale{};
+    for (const EdgePoint& p : points) {
+      const EdgePointEvaluation e = evaluateEdgePoint(p, T_eval, L, true);
+      if (!e.valid) continue;
+      const double w = tDistributionWeight(e.residual, sigma, nu);
+      for (int r = 0; r < 6; ++r) {
+        for (int c = r; c < 6; ++c) scale[edgeNormalIndex(r, c)] += std::abs(w * e.jacobian[r] * e.jacobian[c]);
+        scale[kEdgeNormalGradientOffset + r] += std::abs(w * e.jacobian[r] * e.residual);
+      }
+      scale[kEdgeNormalCostIndex] += w * e.residual * e.residual;
+    }
+    EXPECT_EQ((*gpu_eq)[kEdgeNormalCountIndex], cpu_eq[kEdgeNormalCountIndex]);
+    for (int i = 0; i < kEdgeNormalCountIndex; ++i) {
+      EXPECT_NEAR((*gpu_eq)[i], cpu_eq[i], 1e-4 * scale[i] + 1e-12) << "value " << i;
+    }
+  }
+}
+
+TEST_F(GpuEdges, RejectsBadInput) {
+  auto stages = makeStages(qvga());
+  ASSERT_TRUE(stages);
+  EXPECT_FALSE(stages->readLiveFrame().ok());
+  EXPECT_FALSE(stages->residuals(Pose::Identity(), 0).ok());
+  EXPECT_EQ(stages->processLiveImage(ImageU8(100, 100, 1)).error().code, ErrorCode::kInvalidArgument);
+  EXPECT_EQ(stages->processLiveImage(ImageU8(320, 240, 3)).error().code, ErrorCode::kInvalidArgument);
+  ASSERT_TRUE(stages->processLiveImage(ImageU8(320, 240, 1, 128)).ok());
+  auto flat = stages->readLiveFrame();
+  ASSERT_TRUE(flat.ok());
+  for (float d : flat->levels[0].field.distance.data) ASSERT_EQ(d, 20.0f);  // no edge at all
+  EXPECT_FALSE(stages->residuals(Pose::Identity(), 7).ok());
+  EXPECT_FALSE(stages->accumulate(Pose::Identity(), 0, 0.0, 5.0).ok());
+  auto empty = stages->accumulate(Pose::Identity(), 0, 1.0, 5.0);  // no reference: zeros
+  ASSERT_TRUE(empty.ok());
+  EXPECT_EQ((*empty)[kEdgeNormalCountIndex], 0.0);
+  LiveFrameOptions bad;
+  bad.levels = 0;
+  EXPECT_FALSE(GpuEdgeStages::create(context_, qvga(), bad).ok());
+}
+
+double medianMs(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// Benchmark, not a check: per-stage GPU times at 640x480 vs the CPU functions in the same run.
+// Run: vkloc_gpu_tests --gtest_also_run_disabled_tests --gtest_filter=GpuEdges.DISABLED_Benchmark640x480
+TEST_F(GpuEdges, DISABLED_Benchmark640x480) {
+  const PinholeCamera camera{520.0, 520.0, 319.5, 239.5, 640, 480};
+  LiveFrameOptions options;
+  options.levels = 3;
+  const ImageU8 gray = randomImage(640, 480, 5);
+  auto stages = makeStages(camera, options);
+  ASSERT_TRUE(stages);
+  const int runs = 15;
+  std::vector<std::pair<std::string, std::vector<double>>> gpu_stages;
+  std::vector<double> gpu_total;
+  for (int i = 0; i < runs + 2; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSERT_TRUE(stages->processLiveImage(gray).ok());
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (i < 2) continue;  // JIT warm-up
+    gpu_total.push_back(ms);
+    for (const auto& t : stages->lastTimings()) {
+      auto it = std::find_if(gpu_stages.begin(), gpu_stages.end(), [&](const auto& s) { return s.first == t.stage; });
+      if (it == gpu_stages.end()) it = gpu_stages.insert(gpu_stages.end(), {t.stage, {}});
+      it->second.push_back(t.ms);
+    }
+  }
+  std::printf("GPU (%s) live frame 640x480, 3 levels, median of %d:\n", context_->device().name.c_str(), runs);
+  for (const auto& [name, v] : gpu_stages) std::printf("  %-20s %8.3f ms\n", name.c_str(), medianMs(v));
+  std::printf("  %-20s %8.3f ms (host wall, incl. upload and submissions)\n", "total", medianMs(gpu_total));
+
+  std::vector<double> t_pyr, t_edges, t_dt, t_total;
+  for (int i = 0; i < runs; ++i) {
+    auto t0 = std::chrono::steady_clock::now();
+    auto frame = buildLiveFrame(gray, camera, options);
+    t_total.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    ASSERT_TRUE(frame.ok());
+    double pyr = 0, edg = 0, dt = 0;
+    ImageF32 g = toFloat(gray);
+    for (int k = 0; k < 3; ++k) {
+      t0 = std::chrono::steady_clock::now();
+      if (k > 0) g = downsampleHalf(g);
+      auto t1 = std::chrono::steady_clock::now();
+      auto e = detectEdges(g, options.detector);
+      auto t2 = std::chrono::steady_clock::now();
+      auto f = computeDistanceField(*e, options.truncation_px);
+      auto t3 = std::chrono::steady_clock::now();
+      pyr += std::chrono::duration<double, std::milli>(t1 - t0).count();
+      edg += std::chrono::duration<double, std::milli>(t2 - t1).count();
+      dt += std::chrono::duration<double, std::milli>(t3 - t2).count();
+    }
+    t_pyr.push_back(pyr);
+    t_edges.push_back(edg);
+    t_dt.push_back(dt);
+  }
+  std::printf("CPU live frame 640x480, 3 levels, median of %d:\n", runs);
+  std::printf("  %-20s %8.3f ms\n  %-20s %8.3f ms\n  %-20s %8.3f ms\n  %-20s %8.3f ms\n", "toFloat+pyramid",
+              medianMs(t_pyr), "detectEdges", medianMs(t_edges), "distance field", medianMs(t_dt), "buildLiveFrame",
+              medianMs(t_total));
+
+  auto live = stages->readLiveFrame();
+  ASSERT_TRUE(live.ok());
+  const Pose T = Pose::Identity();
+  const std::vector<EdgePoint> points = pointsNearEdges(live->levels[0], T, 20000, 3);
+  ASSERT_TRUE(stages->setReference(points).ok());
+  std::vector<double> g_res, g_acc, g_res_dev, g_acc_dev, c_res, c_acc;
+  for (int i = 0; i < runs + 2; ++i) {
+    auto t0 = std::chrono::steady_clock::now();
+    ASSERT_TRUE(stages->residuals(T, 0).ok());
+    const double dev_r = stages->lastTimings().empty() ? 0 : stages->lastTimings()[0].ms;
+    auto t1 = std::chrono::steady_clock::now();
+    ASSERT_TRUE(stages->accumulate(T, 0, 1.0, 5.0).ok());
+    const double dev_a = stages->lastTimings().empty() ? 0 : stages->lastTimings()[0].ms;
+    auto t2 = std::chrono::steady_clock::now();
+    auto r = evaluateEdgeResiduals(points, T, live->levels[0]);
+    auto t3 = std::chrono::steady_clock::now();
+    auto eq = accumulateEdgeNormalEquations(points, T, live->levels[0], 1.0, 5.0);
+    auto t4 = std::chrono::steady_clock::now();
+    if (i < 2) continue;
+    g_res.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    g_acc.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
+    g_res_dev.push_back(dev_r);
+    g_acc_dev.push_back(dev_a);
+    c_res.push_back(std::chrono::duration<double, std::milli>(t3 - t2).count());
+    c_acc.push_back(std::chrono::duration<double, std::milli>(t4 - t3).count());
+    EXPECT_GT(eq[kEdgeNormalCountIndex] + r.size(), 0.0);
+  }
+  std::printf("20000 points, level 0, median of %d (device / host wall):\n", runs);
+  std::printf("  GPU residuals        %8.3f / %8.3f ms\n", medianMs(g_res_dev), medianMs(g_res));
+  std::printf("  GPU normal equations %8.3f / %8.3f ms\n", medianMs(g_acc_dev), medianMs(g_acc));
+  std::printf("  CPU residuals        %8.3f ms\n  CPU normal equations %8.3f ms\n", medianMs(c_res), medianMs(c_acc));
+}
+
+}  // namespace
+}  // namespace vkloc::test
