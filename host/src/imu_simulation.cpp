@@ -6,25 +6,11 @@
 #include <limits>
 #include <random>
 
+#include "vkloc/se3.hpp"
 #include "vkloc/trajectory.hpp"
 
 namespace vkloc {
 namespace {
-
-Eigen::Matrix3d hat(const Eigen::Vector3d& w) {
-  Eigen::Matrix3d m;
-  m << 0.0, -w.z(), w.y(), w.z(), 0.0, -w.x(), -w.y(), w.x(), 0.0;
-  return m;
-}
-
-/// Rodrigues' formula with a second-order series near zero.
-Eigen::Matrix3d expSo3(const Eigen::Vector3d& w) {
-  const double theta = w.norm();
-  const Eigen::Matrix3d W = hat(w);
-  if (theta < 1e-8) return Eigen::Matrix3d::Identity() + W + 0.5 * W * W;
-  return Eigen::Matrix3d::Identity() + (std::sin(theta) / theta) * W +
-         ((1.0 - std::cos(theta)) / (theta * theta)) * W * W;
-}
 
 bool finiteNonNegative(double x) { return std::isfinite(x) && x >= 0.0; }
 
@@ -138,7 +124,7 @@ std::vector<TrajectoryState> integrateImu(const TrajectoryState& initial, const 
     next.omega_body = s.gyro_body - gyro_bias;
     if (dt > 0.0) {
       // Rotation: R_{k+1} = R_k exp(dt (w_k + w_{k+1}) / 2) (midpoint rate).
-      const Eigen::Matrix3d R = state.T_world_body.linear() * expSo3(0.5 * dt * (state.omega_body + next.omega_body));
+      const Eigen::Matrix3d R = state.T_world_body.linear() * expSO3(0.5 * dt * (state.omega_body + next.omega_body));
       const Eigen::Quaterniond q(R);
       next.T_world_body.linear() = q.normalized().toRotationMatrix();
       // World acceleration a = R (f - b_a) + g at both ends, taken as linear in between and

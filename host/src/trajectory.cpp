@@ -28,31 +28,12 @@
 #include <limits>
 #include <random>
 
+#include "vkloc/se3.hpp"
+
 namespace vkloc {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-Eigen::Matrix3d hat(const Eigen::Vector3d& w) {
-  Eigen::Matrix3d m;
-  m << 0.0, -w.z(), w.y(), w.z(), 0.0, -w.x(), -w.y(), w.x(), 0.0;
-  return m;
-}
-
-/// Rodrigues' formula with a second-order series near zero.
-Eigen::Matrix3d expSo3(const Eigen::Vector3d& w) {
-  const double theta = w.norm();
-  const Eigen::Matrix3d W = hat(w);
-  if (theta < 1e-8) return Eigen::Matrix3d::Identity() + W + 0.5 * W * W;
-  return Eigen::Matrix3d::Identity() + (std::sin(theta) / theta) * W +
-         ((1.0 - std::cos(theta)) / (theta * theta)) * W * W;
-}
-
-/// Rotation vector of R with angle in [0, pi] (via the unit quaternion, accurate near zero).
-Eigen::Vector3d logSo3(const Eigen::Matrix3d& R) {
-  const Eigen::AngleAxisd aa(Eigen::Quaterniond(R).normalized());
-  return aa.angle() * aa.axis();
-}
 
 /// Deterministic uniform numbers from the fully specified mt19937_64 (standard distributions
 /// differ between library implementations; the generator itself does not).
@@ -398,8 +379,8 @@ TrajectoryState SplineTrajectory::evaluate(int64_t t_ns) const {
   for (int j = 0; j < 3; ++j) {
     const Eigen::Matrix3d Ra = control_[static_cast<size_t>(i - 1 + j)].linear();
     const Eigen::Matrix3d Rb = control_[static_cast<size_t>(i + j)].linear();
-    const Eigen::Vector3d d = logSo3(Ra.transpose() * Rb);
-    const Eigen::Matrix3d A = expSo3(cb[j] * d);
+    const Eigen::Vector3d d = logSO3(Ra.transpose() * Rb);
+    const Eigen::Matrix3d A = expSO3(cb[j] * d);
     omega = A.transpose() * omega + (dcb[j] / dt) * d;
     R = R * A;
   }
