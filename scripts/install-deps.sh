@@ -18,6 +18,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev visp-images-data
   # evaluation reports: plotting library inlined into the HTML
   libjs-chart.js
+  # peer comparison (tests/visp, test-only, GPL-2): ViSP's model-based tracker
+  libvisp-dev
 )
 
 if [ "$(id -u)" -ne 0 ]; then

@@ -146,6 +146,25 @@ TEST(Eval, RigidTransformIsRemovedByAlignmentOnly) {
   EXPECT_NEAR(r.rpe_time.rotation.max, 0.0, 1e-5);
 }
 
+TEST(Eval, AlignmentOfCollinearPositionsUsesOrientations) {
+  // Camera centres on one straight line (as in ViSP's Castle-simu): positions alone leave the
+  // rotation about the line free; the orientations fix it.
+  EvalInput in;
+  for (int i = 0; i < 40; ++i) {
+    const Eigen::Matrix3d R = rot(0.02 * i, {0.3, 1.0, 0.2}) * rot(0.5, {1.0, 0.0, 0.0});
+    in.groundtruth.push_back({i * kSec / 30, makePose({0.05 + 0.001 * i, 0.1 - 0.002 * i, 0.6}, R)});
+  }
+  const Pose X = makePose({0.2, -0.1, 0.05}, rot(25.0 * kDeg, {0.5, -1.0, 0.0}));
+  for (const auto& g : in.groundtruth) in.estimate.push_back({g.t_ns, X * g.T_world_camera});
+  const EvalResult r = evaluate(in);
+  ASSERT_TRUE(r.se3.valid);
+  EXPECT_TRUE(r.se3.rotation_from_orientations);
+  EXPECT_LT(r.se3.rotation_deg.max, 1e-6);
+  EXPECT_LT(r.se3.translation_m.max, 1e-9);
+  EXPECT_TRUE((r.se3.T_gt_est.matrix() - X.inverse().matrix()).cwiseAbs().maxCoeff() < 1e-9);
+  EXPECT_FALSE(r.warnings.empty());
+}
+
 TEST(Eval, ScaledEstimateNeedsSim3) {
   EvalInput in;
   in.groundtruth = helix(80);

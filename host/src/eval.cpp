@@ -227,14 +227,39 @@ Alignment align(const std::vector<FrameError>& frames, const std::vector<Pose>& 
     src.col(i) = frames[i].p_world_est;
     dst.col(i) = frames[i].p_world_gt;
   }
-  const Eigen::Matrix4d S = Eigen::umeyama(src, dst, with_scale);
-  if (!S.allFinite()) return a;
-  Eigen::Matrix3d sR = S.block<3, 3>(0, 0);
-  a.scale = with_scale ? std::cbrt(sR.determinant()) : 1.0;
-  if (!(a.scale > 0)) return a;
+  // Positions on a line leave the rotation about it undetermined (Umeyama then returns an
+  // arbitrary one): detect it from the spread of the ground-truth positions.
+  const Eigen::Vector3d dst_mean = dst.rowwise().mean();
+  const Eigen::Vector3d src_mean = src.rowwise().mean();
+  const Eigen::JacobiSVD<Eigen::Matrix3Xd> spread(dst.colwise() - dst_mean);
+  const Eigen::Vector3d sv = spread.singularValues();
+  if (!(sv(1) > 1e-3 * sv(0)) || !(sv(0) > 1e-9)) {
+    Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+    for (long i = 0; i < n; ++i) sum += T_gt[i].linear() * T_est[i].linear().transpose();
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
+    const Eigen::Matrix3d R = svd.matrixU() * D * svd.matrixV().transpose();
+    a.scale = 1.0;
+    if (with_scale) {
+      const double src_var = (src.colwise() - src_mean).squaredNorm();
+      if (src_var > 0)
+        a.scale = ((dst.colwise() - dst_mean).cwiseProduct(R * (src.colwise() - src_mean))).sum() / src_var;
+    }
+    if (!(a.scale > 0) || !R.allFinite()) return a;
+    a.rotation_from_orientations = true;
+    a.T_gt_est.linear() = R;
+    a.T_gt_est.translation() = dst_mean - a.scale * (R * src_mean);
+  } else {
+    const Eigen::Matrix4d S = Eigen::umeyama(src, dst, with_scale);
+    if (!S.allFinite()) return a;
+    Eigen::Matrix3d sR = S.block<3, 3>(0, 0);
+    a.scale = with_scale ? std::cbrt(sR.determinant()) : 1.0;
+    if (!(a.scale > 0)) return a;
+    a.T_gt_est.linear() = sR / a.scale;
+    a.T_gt_est.translation() = S.block<3, 1>(0, 3);
+  }
   a.valid = true;
-  a.T_gt_est.linear() = sR / a.scale;
-  a.T_gt_est.translation() = S.block<3, 1>(0, 3);
   std::vector<double> te(n), re(n);
   for (long i = 0; i < n; ++i) {
     const Eigen::Vector3d p = a.scale * (a.T_gt_est.linear() * T_est[i].translation()) + a.T_gt_est.translation();
@@ -445,6 +470,9 @@ Result<EvalResult> evaluateTrajectory(const EvalInput& input, const EvalOptions&
     for (size_t i = 0; i < r.frames.size(); ++i) {
       r.frames[i].aligned_translation_m = aligned_t[i];
       r.frames[i].aligned_rotation_deg = aligned_r[i];
+    }
+    if (r.se3.rotation_from_orientations) {
+      r.warnings.push_back("ground-truth positions lie on a line: the aligned rotation is taken from the orientations");
     }
   } else if (r.matched > 0) {
     r.warnings.push_back("fewer than 3 matched poses: no aligned ATE");

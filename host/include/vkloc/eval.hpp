@@ -95,8 +95,11 @@ struct Alignment {
   bool valid = false;                ///< False when fewer than 3 matched poses.
   Pose T_gt_est = Pose::Identity();  ///< Rotation + translation taking estimate world into GT world.
   double scale = 1.0;                ///< Scale applied before T_gt_est (1 for SE(3)).
-  ErrorStats translation_m;          ///< Position errors after alignment, metres.
-  ErrorStats rotation_deg;           ///< Rotation errors after alignment, degrees.
+  /// True when the positions lie on a line (or a point), so that they leave the rotation about
+  /// that line free: the rotation is then the chordal mean of R_gt R_est^T over the frames.
+  bool rotation_from_orientations = false;
+  ErrorStats translation_m;  ///< Position errors after alignment, metres.
+  ErrorStats rotation_deg;   ///< Rotation errors after alignment, degrees.
 };
 
 /// Relative pose error over segments: for matched frames i < j (j the first frame whose segment
