@@ -1,8 +1,11 @@
 #version 450
 // Edge alignment per reference point (evaluateEdgePoint in host/src/edge_tracker.cpp):
 // p = T_camera_ref P, (u, v) = (fx x / z + cx, fy y / z + cy); valid when z > 1e-6 m, the 2x2
-// bilinear footprint lies inside the image and none of its four distances is truncated;
-// r = bilinear distance, J = [G_u G_v] [fx/z 0 -fx x/z^2; 0 fy/z -fy y/z^2] [I | -hat(p)].
+// bilinear footprint lies inside the image and none of its four distances is truncated.
+// When the four pixels of the footprint carry one sub-pixel edge line (LINES: normals non-zero at
+// (x0, y0), each within dot > 0.8 of it), r = |bilinear s| and (G_u, G_v) = sign(s) * bilinear n;
+// otherwise r = bilinear distance and (G_u, G_v) = bilinear DGRAD.
+// J = [G_u G_v] [fx/z 0 -fx x/z^2; 0 fy/z -fy y/z^2] [I | -hat(p)].
 // kMode 0: writes r per point (-1 when invalid). kMode 1: accumulates the 29 normal-equation
 // values (edge_tracker.hpp layout) with t-distribution weights w = (nu + 1) / (nu + (r/sigma)^2)
 // in vec4 accumulators, reduced by subgroupAdd and per workgroup into PARTIALS[group * 8 + k].
@@ -15,6 +18,7 @@ layout(local_size_x = 64) in;
 layout(push_constant) uniform Push { EdgePush pc; };
 layout(set = 0, binding = EDGE_BINDING_DISTANCE, r32f) readonly uniform image2D distance_px;
 layout(set = 0, binding = EDGE_BINDING_DGRAD, rg32f) readonly uniform image2D dgrad;
+layout(set = 0, binding = EDGE_BINDING_LINES, rgba32f) readonly uniform image2D lines;
 layout(std430, set = 0, binding = EDGE_BINDING_POINTS) readonly buffer Points { vec4 points[]; };
 layout(std430, set = 0, binding = EDGE_BINDING_RESIDUALS) writeonly buffer Residuals { float residuals[]; };
 layout(std430, set = 0, binding = EDGE_BINDING_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
@@ -41,6 +45,7 @@ void main() {
     }
     ivec2 q = ivec2(0);
     float w00 = 0.0, w10 = 0.0, w01 = 0.0, w11 = 0.0;
+    float r_distance = 0.0;
     if (valid) {
       q = ivec2(int(u), int(v));
       float a = u - float(q.x), b = v - float(q.y);
@@ -53,15 +58,35 @@ void main() {
       w10 = a * (1.0 - b);
       w01 = (1.0 - a) * b;
       w11 = a * b;
-      if (valid) r = w00 * d00 + w10 * d10 + w01 * d01 + w11 * d11;
+      r_distance = w00 * d00 + w10 * d10 + w01 * d01 + w11 * d11;
+    }
+    bool on_line = false;
+    vec2 g = vec2(0.0);
+    if (valid) {
+      vec3 l00 = imageLoad(lines, q).xyz;
+      vec3 l10 = imageLoad(lines, q + ivec2(1, 0)).xyz;
+      vec3 l01 = imageLoad(lines, q + ivec2(0, 1)).xyz;
+      vec3 l11 = imageLoad(lines, q + ivec2(1, 1)).xyz;
+      on_line = (l00.y != 0.0 || l00.z != 0.0) && dot(l10.yz, l00.yz) > 0.8 && dot(l01.yz, l00.yz) > 0.8 &&
+                dot(l11.yz, l00.yz) > 0.8;
+      if (on_line) {
+        float s_line = w00 * l00.x + w10 * l10.x + w01 * l01.x + w11 * l11.x;
+        float sign_line = s_line < 0.0 ? -1.0 : 1.0;
+        r = abs(s_line);
+        g = sign_line * (w00 * l00.yz + w10 * l10.yz + w01 * l01.yz + w11 * l11.yz);
+      } else {
+        r = r_distance;
+      }
     }
     if (kMode == 0) {
       residuals[i] = r;
       continue;
     }
     if (!valid) continue;
-    vec2 g = w00 * imageLoad(dgrad, q).xy + w10 * imageLoad(dgrad, q + ivec2(1, 0)).xy +
-             w01 * imageLoad(dgrad, q + ivec2(0, 1)).xy + w11 * imageLoad(dgrad, q + ivec2(1, 1)).xy;
+    if (!on_line) {
+      g = w00 * imageLoad(dgrad, q).xy + w10 * imageLoad(dgrad, q + ivec2(1, 0)).xy +
+          w01 * imageLoad(dgrad, q + ivec2(0, 1)).xy + w11 * imageLoad(dgrad, q + ivec2(1, 1)).xy;
+    }
     float ga = g.x * fx * iz;
     float gb = g.y * fy * iz;
     vec3 jt = vec3(ga, gb, -(ga * p.x + gb * p.y) * iz);

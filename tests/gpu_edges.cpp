@@ -69,7 +69,9 @@ class GpuEdges : public GpuTest {
   /// GPU live frame vs CPU: pyramid within 1e-3 gray levels, edge maps equal except <= 0.1 %
   /// of the pixels (NMS ties decided by float rounding), distance field vs the exact CPU EDT of
   /// the GPU's own edge map: <= 0.01 % pixels off by > 0.05 px, max error <= 0.5 px; gradients
-  /// within 1e-3 except <= 0.1 % pixels (next to a JFA miss).
+  /// within 1e-3 except <= 0.1 % pixels (next to a JFA miss); edge lines (s, n_u, n_v) within
+  /// 1e-3 except in the 5x5 neighbourhoods of differing edge pixels and <= 0.05 % other pixels
+  /// (nearest-edge ties decided by float rounding).
   void compareLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const LiveFrameOptions& options) {
     auto stages = makeStages(camera, options);
     ASSERT_TRUE(stages);
@@ -107,6 +109,24 @@ class GpuEdges : public GpuTest {
       EXPECT_LE(off, n / 10000) << "pixels off by > 0.05 px";
       EXPECT_LE(worst, 0.5);
       EXPECT_LE(grad_off, n / 1000);
+
+      if (!options.subpixel_edges) {
+        EXPECT_TRUE(g.edge_lines.empty());
+        continue;
+      }
+      ASSERT_EQ(g.edge_lines.channels, 3);
+      ASSERT_EQ(c.edge_lines.data.size(), g.edge_lines.data.size());
+      int line_pixels = 0, lines_off = 0;
+      for (int i = 0; i < n; ++i) {
+        const float* a = &g.edge_lines.data[3 * static_cast<size_t>(i)];
+        const float* b = &c.edge_lines.data[3 * static_cast<size_t>(i)];
+        line_pixels += b[1] != 0 || b[2] != 0;
+        double e = 0;
+        for (int ch = 0; ch < 3; ++ch) e = std::max(e, std::abs(static_cast<double>(a[ch]) - b[ch]));
+        lines_off += e > 1e-3;
+      }
+      EXPECT_GT(line_pixels, 2 * edge_pixels) << "edge lines cover the pixels within 2 px of an edge";
+      EXPECT_LE(lines_off, 25 * differingPixels(g.edges, c.edges) + n / 2000) << "of " << line_pixels;
     }
   }
 };
@@ -130,7 +150,11 @@ TEST_F(GpuEdges, LiveFrameMatchesCpuWithOddSizeAndOtherOptions) {
   options.detector.high_factor = 3.0;
   options.detector.low_ratio = 0.5;
   const PinholeCamera camera{200.0, 200.0, 100.0, 70.0, 201, 143};
-  compareLiveFrame(randomImage(201, 143, 7, 6), camera, options);
+  for (bool subpixel : {true, false}) {
+    SCOPED_TRACE(::testing::Message() << "subpixel_edges " << subpixel);
+    options.subpixel_edges = subpixel;
+    compareLiveFrame(randomImage(201, 143, 7, 6), camera, options);
+  }
 }
 
 TEST_F(GpuEdges, LiveFrameMatchesCpuOnRenderedDemoView) {
@@ -217,6 +241,9 @@ TEST_F(GpuEdges, ResidualsAndNormalEquationsMatchCpuOnTheSameField) {
   ASSERT_TRUE(stages->processLiveImage(randomImage(320, 240, 3)).ok());
   auto live = stages->readLiveFrame();
   ASSERT_TRUE(live.ok());
+  // The read-back frame carries the GPU's edge lines, so the CPU evaluation below takes the same
+  // sub-pixel-line / distance-field branch per point as the GPU kernels.
+  ASSERT_EQ(live->levels[0].edge_lines.channels, 3);
   const Pose T_camera_ref = expSE3((Vector6d() << 0.05, -0.03, 0.1, 0.01, -0.02, 0.015).finished());
   // The pose the points were made with differs from the evaluated pose by a small motion, so
   // residuals are spread over 0..truncation and the gradient g is far from zero.
@@ -270,6 +297,69 @@ TEST_F(GpuEdges, ResidualsAndNormalEquationsMatchCpuOnTheSameField) {
       EXPECT_NEAR((*gpu_eq)[i], cpu_eq[i], 1e-4 * scale[i] + 1e-12) << "value " << i;
     }
   }
+}
+
+TEST_F(GpuEdges, SubpixelEdgeLinesGiveTheDistanceToATiltedStep) {
+  // A step edge along the line n . (u, v) = c, n at 20 degrees, c off the pixel grid; pixel
+  // values are the area fraction of the pixel on the bright side (box-filtered step). Oracle:
+  // the residual of a point at signed offset o from the line is |o|.
+  const int w = 160, h = 120;
+  const double angle = 20.0 * M_PI / 180.0;
+  const Eigen::Vector2d n(std::cos(angle), std::sin(angle));
+  const double c = n.dot(Eigen::Vector2d(80.3, 60.0));
+  ImageU8 gray(w, h, 1, 0);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      double covered = 0;
+      for (int sy = 0; sy < 8; ++sy) {
+        for (int sx = 0; sx < 8; ++sx) {
+          covered += n.dot(Eigen::Vector2d(x - 0.4375 + sx / 8.0, y - 0.4375 + sy / 8.0)) > c;
+        }
+      }
+      gray.at(x, y) = static_cast<uint8_t>(std::lround(60 + 120 * covered / 64));
+    }
+  }
+  const PinholeCamera cam{200.0, 200.0, 79.5, 59.5, w, h};
+  LiveFrameOptions options;
+  options.levels = 1;
+  auto stages = makeStages(cam, options);
+  ASSERT_TRUE(stages);
+  ASSERT_TRUE(stages->processLiveImage(gray).ok());
+  const Eigen::Vector2d tangent(-n.y(), n.x());
+  std::vector<EdgePoint> points;
+  std::vector<double> offsets;
+  for (int k = -20; k <= 20; ++k) {
+    for (double offset : {0.0, 0.7, -0.7}) {
+      const Eigen::Vector2d uv = n * c + tangent * (1.7 * k) + n * offset;
+      points.push_back(EdgePoint{static_cast<float>((uv.x() - cam.cx) / cam.fx),
+                                 static_cast<float>((uv.y() - cam.cy) / cam.fy), 1.0f, kEdgeTexture});
+      offsets.push_back(offset);
+    }
+  }
+  ASSERT_TRUE(stages->setReference(points).ok());
+  auto r = stages->residuals(Pose::Identity(), 0);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  ASSERT_EQ(r->size(), points.size());
+  double worst = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    ASSERT_GE((*r)[i], 0.0f) << "point " << i;
+    worst = std::max(worst, std::abs((*r)[i] - std::abs(offsets[i])));
+  }
+  // As the CPU (host_edge_tracker): ~0.03 px; pixel-centre distances alone are off by up to 0.5 px.
+  EXPECT_LT(worst, 0.08);
+  // With the lines off the same points see the pixel-centre distance field only.
+  options.subpixel_edges = false;
+  auto coarse = makeStages(cam, options);
+  ASSERT_TRUE(coarse);
+  ASSERT_TRUE(coarse->processLiveImage(gray).ok());
+  ASSERT_TRUE(coarse->setReference(points).ok());
+  auto r_coarse = coarse->residuals(Pose::Identity(), 0);
+  ASSERT_TRUE(r_coarse.ok());
+  double worst_coarse = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if ((*r_coarse)[i] >= 0) worst_coarse = std::max(worst_coarse, std::abs((*r_coarse)[i] - std::abs(offsets[i])));
+  }
+  EXPECT_GT(worst_coarse, 0.2);
 }
 
 TEST_F(GpuEdges, RejectsBadInput) {

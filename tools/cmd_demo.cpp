@@ -1,21 +1,64 @@
-// vkloc demo: the main job on built-in data (for now: render the demo models at their demo
-// viewpoints and report where the images are and how long each render took).
+// vkloc demo: the main job on built-in data: render the demo models at their demo viewpoints
+// (timings), then simulate a short built-in sequence, localize every frame in the model and print
+// accuracy, frame rate and the report's path.
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
 
 #include "common.hpp"
 #include "vkloc/demo.hpp"
+#include "vkloc/simulate.hpp"
 
 namespace vkloc::cli {
+
 namespace {
 
 struct DemoArgs {
   std::string out_dir = "vkloc_demo";
   DeviceArgs device;
   CameraArgs camera;
+  std::string scene = "room";
+  std::string difficulty = "hard";
+  size_t frames = 100;
+  std::string backend = "auto";
+  std::string policy = "when-needed";
+  bool no_track = false;
 };
+
+void runLocalization(const DemoArgs& a, const std::shared_ptr<GpuContext>& context) {
+  const std::string name = fmt::format("{}_{}", a.scene, a.difficulty);
+  const std::string seq_dir = (std::filesystem::path(a.out_dir) / name).string();
+  std::printf("\nlocalization: simulating %zu frames of '%s %s' -> %s\n", a.frames, a.scene.c_str(),
+              a.difficulty.c_str(), seq_dir.c_str());
+  std::fflush(stdout);
+  const Model model = take(scenarioModel(a.scene));
+  SimulationOptions options = take(scenarioOptions(a.scene, a.difficulty, 1, model.bounds));
+  options.max_frames = a.frames;
+  options.duration_s = std::max(1.0, static_cast<double>(a.frames) / options.rate_hz + 0.5);
+  const bool tty = isatty(fileno(stdout)) != 0;
+  auto progress = [tty](size_t done, size_t total) {
+    if (tty) {
+      std::printf("\rsimulated %zu/%zu", done, total);
+      if (done == total) std::printf("\n");
+      std::fflush(stdout);
+    }
+  };
+  const SimulationReport report =
+      take(simulateSequence(model, options, gpuRendererFactory(context), seq_dir, progress));
+  std::printf("simulated %zu frames in %.1f s\n", report.frames, report.seconds);
+  std::fflush(stdout);
+  const std::string out = (std::filesystem::path(a.out_dir) / (name + "_trajectory.txt")).string();
+  const std::string report_dir = (std::filesystem::path(a.out_dir) / (name + "_report")).string();
+  std::vector<std::string> args = {"--sequence", seq_dir,     "--out",   out,        "--report",
+                                   report_dir,   "--backend", a.backend, "--policy", a.policy};
+  if (!a.device.device.empty()) {
+    args.push_back("--device");
+    args.push_back(a.device.device);
+  }
+  runTrackArguments(args);
+}
 
 void run(const DemoArgs& a) {
   const PinholeCamera camera = a.camera.get();
@@ -53,14 +96,31 @@ void run(const DemoArgs& a) {
   }
   std::printf("\nimages written under %s/ (rgba, gray, depth_mm 16-bit PNG, depth float TIFF, normals)\n",
               std::filesystem::absolute(a.out_dir).string().c_str());
+  if (!a.no_track && a.frames > 0) runLocalization(a, context);
 }
 
 }  // namespace
 
 static void addDemoVerb(CLI::App& app) {
   auto args = std::make_shared<DemoArgs>();
-  CLI::App* cmd = app.add_subcommand("demo", "Render the built-in city and room models and report timings");
+  CLI::App* cmd = app.add_subcommand(
+      "demo", "Render the built-in models (timings), then simulate a short sequence, localize it and report accuracy");
   cmd->add_option("--out,-o", args->out_dir, "Output directory")->capture_default_str();
+  cmd->add_option("--scene", args->scene, "Simulated scenario: room | city")
+      ->check(CLI::IsMember({"room", "city"}))
+      ->capture_default_str();
+  cmd->add_option("--difficulty", args->difficulty, "easy | hard")
+      ->check(CLI::IsMember({"easy", "hard"}))
+      ->capture_default_str();
+  cmd->add_option("--frames", args->frames, "Frames to simulate and localize (0 = render views only)")
+      ->capture_default_str();
+  cmd->add_option("--backend", args->backend, "Live edges + alignment: auto | vulkan | cpu")
+      ->check(CLI::IsMember({"auto", "vulkan", "cpu"}))
+      ->capture_default_str();
+  cmd->add_option("--policy", args->policy, "Reference re-rendering: every-frame | when-needed")
+      ->check(CLI::IsMember({"every-frame", "when-needed"}))
+      ->capture_default_str();
+  cmd->add_flag("--no-track", args->no_track, "Only render the demo views");
   args->device.add(*cmd);
   args->camera.add(*cmd);
   cmd->callback([args] { run(*args); });

@@ -67,6 +67,9 @@ inline double msSince(std::chrono::steady_clock::time_point t0) {
 /// named with `stem` in `dir`. Returns the paths written.
 std::vector<std::string> writeRender(const std::string& dir, const std::string& stem, const RenderOutput& out);
 
+/// Runs `vkloc track` with these arguments (used by `vkloc demo`); throws Failure on errors.
+void runTrackArguments(const std::vector<std::string>& arguments);
+
 /// A verb of the command line: `add` creates its subcommand on the app. Each tools/cmd_*.cpp
 /// registers its verbs with VKLOC_REGISTER_VERB; main() adds them ordered by `order`, so adding a
 /// verb is adding a file.

@@ -30,6 +30,7 @@ static_assert(offsetof(EdgeControl, candidate_count) == 20);
 static_assert(offsetof(EdgeControl, changes) == 32);
 static_assert(sizeof(EdgeControl) == 32 + 4 * EDGE_MAX_HYSTERESIS_PASSES);
 static_assert(sizeof(EdgePoint) == 16);
+static_assert(static_cast<float>(EDGE_LINE_RADIUS_PX) == kEdgeLineRadiusPx);
 
 namespace {
 
@@ -49,6 +50,7 @@ enum Kernel : int {
   kJfaStep,
   kDistance,
   kDistanceGradient,
+  kEdgeLines,
   kResiduals,
   kNormalEquations,
   kKernelCount
@@ -61,8 +63,8 @@ struct KernelSpec {
 constexpr KernelSpec kKernels[kKernelCount] = {
     {"edge_convert.comp", -1}, {"pyramid_down.comp", -1},  {"edge_sobel.comp", -1},      {"edge_hist.comp", -1},
     {"edge_select.comp", -1},  {"edge_nms.comp", -1},      {"edge_hysteresis.comp", -1}, {"jfa_init.comp", -1},
-    {"jfa_step.comp", -1},     {"edge_distance.comp", -1}, {"edge_dgrad.comp", -1},      {"reduce_edges.comp", 0},
-    {"reduce_edges.comp", 1}};
+    {"jfa_step.comp", -1},     {"edge_distance.comp", -1}, {"edge_dgrad.comp", -1},      {"edge_lines.comp", -1},
+    {"reduce_edges.comp", 0},  {"reduce_edges.comp", 1}};
 
 uint32_t groups(int n, int local) { return static_cast<uint32_t>((n + local - 1) / local); }
 
@@ -99,7 +101,7 @@ struct GpuEdgeStages::Impl {
 
   struct Level {
     PinholeCamera camera;
-    engine::Image gray, mag, grad, state, seed_a, seed_b, distance, dgrad;
+    engine::Image gray, mag, grad, state, seed_a, seed_b, distance, dgrad, lines;
     Buffer hist, control, candidates;
     VkDescriptorSet set = VK_NULL_HANDLE;
     bool seeds_in_b = false;  // where the final jump-flooding seeds are
@@ -108,8 +110,10 @@ struct GpuEdgeStages::Impl {
   std::vector<Level> levels;
   Buffer input8;
   Buffer points, residuals, partials;
-  uint32_t point_count = 0;
-  uint32_t point_capacity = 0;
+  uint32_t point_count = 0;     // points of the single list (setReference)
+  uint32_t point_capacity = 0;  // capacity of `points`, in points
+  // Per-level lists (setLevelPoints): first point and count per level; empty = single list.
+  std::vector<uint32_t> level_offsets, level_counts;
   bool have_frame = false;
 
   DeviceHandle<VkDescriptorSetLayout> set_layout;
@@ -154,7 +158,8 @@ Result<engine::Image> GpuEdgeStages::Impl::storageImage(int w, int h, VkFormat f
 
 Status GpuEdgeStages::Impl::init() {
   device = ctx->device;
-  for (VkFormat f : {VK_FORMAT_R32_SFLOAT, VK_FORMAT_R32G32_SFLOAT, VK_FORMAT_R32_UINT}) {
+  for (VkFormat f :
+       {VK_FORMAT_R32_SFLOAT, VK_FORMAT_R32G32_SFLOAT, VK_FORMAT_R32_UINT, VK_FORMAT_R32G32B32A32_SFLOAT}) {
     VkFormatProperties p{};
     vkGetPhysicalDeviceFormatProperties(ctx->physical, f, &p);
     if (!(p.optimalTilingFeatures & VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT)) {
@@ -194,7 +199,8 @@ Status GpuEdgeStages::Impl::init() {
                                  {&level.seed_a, VK_FORMAT_R32_UINT},
                                  {&level.seed_b, VK_FORMAT_R32_UINT},
                                  {&level.distance, VK_FORMAT_R32_SFLOAT},
-                                 {&level.dgrad, VK_FORMAT_R32G32_SFLOAT}}) {
+                                 {&level.dgrad, VK_FORMAT_R32G32_SFLOAT},
+                                 {&level.lines, VK_FORMAT_R32G32B32A32_SFLOAT}}) {
       auto img = storageImage(w, h, format);
       if (!img.ok()) return img.error();
       *image = std::move(*img);
@@ -223,7 +229,7 @@ Status GpuEdgeStages::Impl::init() {
   std::vector<VkDescriptorSetLayoutBinding> bindings(EDGE_BINDING_COUNT);
   for (uint32_t b = 0; b < EDGE_BINDING_COUNT; ++b) {
     bindings[b].binding = b;
-    const bool image = b >= EDGE_BINDING_GRAY_PREV && b <= EDGE_BINDING_DGRAD;
+    const bool image = (b >= EDGE_BINDING_GRAY_PREV && b <= EDGE_BINDING_DGRAD) || b == EDGE_BINDING_LINES;
     bindings[b].descriptorType = image ? VK_DESCRIPTOR_TYPE_STORAGE_IMAGE : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     bindings[b].descriptorCount = 1;
     bindings[b].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
@@ -235,7 +241,7 @@ Status GpuEdgeStages::Impl::init() {
   VKLOC_VK(vkCreateDescriptorSetLayout(device, &lci, nullptr, &layout));
   set_layout = DeviceHandle<VkDescriptorSetLayout>(device, layout, vkDestroyDescriptorSetLayout);
   const uint32_t n_sets = static_cast<uint32_t>(levels.size());
-  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 9 * n_sets},
+  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 10 * n_sets},
                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7 * n_sets}};
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.maxSets = n_sets;
@@ -251,22 +257,23 @@ Status GpuEdgeStages::Impl::init() {
     ai.descriptorSetCount = 1;
     ai.pSetLayouts = &layout;
     VKLOC_VK(vkAllocateDescriptorSets(device, &ai, &L.set));
-    const engine::Image* images[9] = {k > 0 ? &levels[k - 1].gray : &L.gray,
-                                      &L.gray,
-                                      &L.mag,
-                                      &L.grad,
-                                      &L.state,
-                                      &L.seed_a,
-                                      &L.seed_b,
-                                      &L.distance,
-                                      &L.dgrad};
-    VkDescriptorImageInfo image_infos[9];
-    VkWriteDescriptorSet writes[13];
-    for (int i = 0; i < 9; ++i) {
+    const engine::Image* images[10] = {k > 0 ? &levels[k - 1].gray : &L.gray,
+                                       &L.gray,
+                                       &L.mag,
+                                       &L.grad,
+                                       &L.state,
+                                       &L.seed_a,
+                                       &L.seed_b,
+                                       &L.distance,
+                                       &L.dgrad,
+                                       &L.lines};
+    VkDescriptorImageInfo image_infos[10];
+    VkWriteDescriptorSet writes[14];
+    for (int i = 0; i < 10; ++i) {
       image_infos[i] = {VK_NULL_HANDLE, images[i]->view.get(), VK_IMAGE_LAYOUT_GENERAL};
       writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       writes[i].dstSet = L.set;
-      writes[i].dstBinding = EDGE_BINDING_GRAY_PREV + i;
+      writes[i].dstBinding = i < 9 ? EDGE_BINDING_GRAY_PREV + i : EDGE_BINDING_LINES;
       writes[i].descriptorCount = 1;
       writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
       writes[i].pImageInfo = &image_infos[i];
@@ -277,14 +284,14 @@ Status GpuEdgeStages::Impl::init() {
     VkDescriptorBufferInfo buffer_infos[4];
     for (int i = 0; i < 4; ++i) {
       buffer_infos[i] = {buffers[i]->buffer.get(), 0, VK_WHOLE_SIZE};
-      writes[9 + i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-      writes[9 + i].dstSet = L.set;
-      writes[9 + i].dstBinding = buffer_bindings[i];
-      writes[9 + i].descriptorCount = 1;
-      writes[9 + i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-      writes[9 + i].pBufferInfo = &buffer_infos[i];
+      writes[10 + i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+      writes[10 + i].dstSet = L.set;
+      writes[10 + i].dstBinding = buffer_bindings[i];
+      writes[10 + i].descriptorCount = 1;
+      writes[10 + i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      writes[10 + i].pBufferInfo = &buffer_infos[i];
     }
-    vkUpdateDescriptorSets(device, 13, writes, 0, nullptr);
+    vkUpdateDescriptorSets(device, 14, writes, 0, nullptr);
   }
   VKLOC_TRY_STATUS(updatePointBindings());
 
@@ -352,7 +359,8 @@ Status GpuEdgeStages::Impl::init() {
   return ctx->runOnce([&](VkCommandBuffer c) {
     std::vector<VkImageMemoryBarrier> barriers;
     for (Level& L : levels) {
-      for (engine::Image* image : {&L.gray, &L.mag, &L.grad, &L.state, &L.seed_a, &L.seed_b, &L.distance, &L.dgrad}) {
+      for (engine::Image* image :
+           {&L.gray, &L.mag, &L.grad, &L.state, &L.seed_a, &L.seed_b, &L.distance, &L.dgrad, &L.lines}) {
         VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
         b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
         b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
@@ -369,7 +377,9 @@ Status GpuEdgeStages::Impl::init() {
 }
 
 Status GpuEdgeStages::Impl::updatePointBindings() {
-  const uint32_t capacity = std::max<uint32_t>(point_count, 256);
+  uint32_t needed = point_count;
+  for (size_t k = 0; k < level_offsets.size(); ++k) needed = std::max(needed, level_offsets[k] + level_counts[k]);
+  const uint32_t capacity = std::max<uint32_t>(needed, 256);
   if (capacity > point_capacity || !points.buffer) {
     const uint32_t grown = std::max(capacity, point_capacity * 2);
     auto p = ctx->createBuffer(static_cast<VkDeviceSize>(grown) * sizeof(EdgePoint),
@@ -395,6 +405,20 @@ Status GpuEdgeStages::Impl::updatePointBindings() {
       }
       vkUpdateDescriptorSets(device, 3, writes, 0, nullptr);
     }
+  }
+  // Each level's set sees its own list (offsets are multiples of 256 bytes, the largest
+  // minStorageBufferOffsetAlignment Vulkan allows), or the single list at offset 0.
+  for (size_t k = 0; k < levels.size(); ++k) {
+    const VkDeviceSize offset =
+        level_offsets.empty() ? 0 : static_cast<VkDeviceSize>(level_offsets[k]) * sizeof(EdgePoint);
+    VkDescriptorBufferInfo info{points.buffer.get(), offset, VK_WHOLE_SIZE};
+    VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    write.dstSet = levels[k].set;
+    write.dstBinding = EDGE_BINDING_POINTS;
+    write.descriptorCount = 1;
+    write.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    write.pBufferInfo = &info;
+    vkUpdateDescriptorSets(device, 1, &write, 0, nullptr);
   }
   return Status::success();
 }
@@ -539,6 +563,9 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
   dispatch(kDistance, level, push, gx, gy);
   dispatch(kDistanceGradient, level, push, gx, gy);
   mark("distance+gradient");
+  push.flags = options.subpixel_edges ? 1u : 0u;
+  dispatch(kEdgeLines, level, push, gx, gy);
+  mark("edge lines");
 }
 
 GpuEdgeStages::GpuEdgeStages(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -630,12 +657,13 @@ Status GpuEdgeStages::processLiveImage(const ImageU8& gray) {
 Result<LiveFrame> GpuEdgeStages::readLiveFrame() {
   Impl& m = *impl_;
   if (!m.have_frame) return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages::readLiveFrame: no live image yet");
-  // Gray, state, distance (4 bytes per pixel) and gradient (8) of every level, packed.
+  // Gray, state, distance (4 bytes per pixel), gradient (8) and edge lines (16) of every level,
+  // packed.
   VkDeviceSize total = 0;
-  for (const auto& L : m.levels) total += static_cast<VkDeviceSize>(L.camera.width) * L.camera.height * 20 + 64;
+  for (const auto& L : m.levels) total += static_cast<VkDeviceSize>(L.camera.width) * L.camera.height * 36 + 80;
   auto staging = m.ctx->createBuffer(total, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
   if (!staging.ok()) return staging.error();
-  std::vector<std::array<VkDeviceSize, 4>> offsets;
+  std::vector<std::array<VkDeviceSize, 5>> offsets;
   VKLOC_TRY_STATUS(m.ctx->runOnce([&](VkCommandBuffer c) {
     VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
     mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
@@ -644,16 +672,17 @@ Result<LiveFrame> GpuEdgeStages::readLiveFrame() {
                          0, nullptr);
     VkDeviceSize offset = 0;
     for (auto& L : m.levels) {
-      std::array<VkDeviceSize, 4> o{};
-      const engine::Image* images[4] = {&L.gray, &L.state, &L.distance, &L.dgrad};
-      for (int i = 0; i < 4; ++i) {
+      std::array<VkDeviceSize, 5> o{};
+      const engine::Image* images[5] = {&L.gray, &L.state, &L.distance, &L.dgrad, &L.lines};
+      constexpr VkDeviceSize kPixelBytes[5] = {4, 4, 4, 8, 16};
+      for (int i = 0; i < 5; ++i) {
         o[i] = offset;
         VkBufferImageCopy region{};
         region.bufferOffset = offset;
         region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
         region.imageExtent = {images[i]->width, images[i]->height, 1};
         vkCmdCopyImageToBuffer(c, images[i]->image.get(), VK_IMAGE_LAYOUT_GENERAL, staging->buffer.get(), 1, &region);
-        offset += (static_cast<VkDeviceSize>(images[i]->width) * images[i]->height * (i == 3 ? 8 : 4) + 15) / 16 * 16;
+        offset += (static_cast<VkDeviceSize>(images[i]->width) * images[i]->height * kPixelBytes[i] + 15) / 16 * 16;
       }
       offsets.push_back(o);
     }
@@ -675,6 +704,13 @@ Result<LiveFrame> GpuEdgeStages::readLiveFrame() {
     out.field.gradient = ImageF32(w, h, 2);
     std::memcpy(out.field.distance.data.data(), base + offsets[k][2], n * 4);
     std::memcpy(out.field.gradient.data.data(), base + offsets[k][3], n * 8);
+    if (m.options.subpixel_edges) {
+      out.edge_lines = ImageF32(w, h, 3);
+      const auto* lines = reinterpret_cast<const float*>(base + offsets[k][4]);
+      for (size_t i = 0; i < n; ++i) {
+        for (int c = 0; c < 3; ++c) out.edge_lines.data[i * 3 + c] = lines[i * 4 + c];
+      }
+    }
     if (m.options.keep_intermediate) {
       out.gray = ImageF32(w, h, 1);
       std::memcpy(out.gray.data.data(), base + offsets[k][0], n * 4);
@@ -691,8 +727,96 @@ Status GpuEdgeStages::setReference(const std::vector<EdgePoint>& points) {
   Impl& m = *impl_;
   if (points.size() > (1u << 28)) return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages: too many points");
   m.point_count = static_cast<uint32_t>(points.size());
+  m.level_offsets.clear();
+  m.level_counts.clear();
   VKLOC_TRY_STATUS(m.updatePointBindings());
   return m.ctx->upload(m.points, points.data(), points.size() * sizeof(EdgePoint));
+}
+
+Status GpuEdgeStages::setLevelPoints(const EdgeReference& reference) {
+  Impl& m = *impl_;
+  std::vector<uint32_t> offsets, counts;
+  size_t total = 0;
+  for (int k = 0; k < static_cast<int>(m.levels.size()); ++k) {
+    const size_t n = edgePointsForLevel(reference, k).size();
+    offsets.push_back(static_cast<uint32_t>(total));
+    counts.push_back(static_cast<uint32_t>(n));
+    total += (n + 15) / 16 * 16;  // 256-byte aligned starts
+    if (total > (1u << 28)) return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages: too many points");
+  }
+  std::vector<EdgePoint> packed(std::max<size_t>(total, 1));
+  for (int k = 0; k < static_cast<int>(m.levels.size()); ++k) {
+    const std::vector<EdgePoint>& points = edgePointsForLevel(reference, k);
+    std::copy(points.begin(), points.end(), packed.begin() + offsets[k]);
+  }
+  m.point_count = 0;
+  m.level_offsets = std::move(offsets);
+  m.level_counts = std::move(counts);
+  VKLOC_TRY_STATUS(m.updatePointBindings());
+  const size_t used = m.level_offsets.empty() ? 0 : m.level_offsets.back() + m.level_counts.back();
+  if (used == 0) return Status::success();
+  return m.ctx->upload(m.points, packed.data(), used * sizeof(EdgePoint));
+}
+
+bool GpuEdgeStages::hasLevelPoints() const { return !impl_->level_offsets.empty(); }
+
+float GpuEdgeStages::truncationPx() const { return impl_->options.truncation_px; }
+
+Result<double> GpuEdgeStages::nearEdgeFraction(int level, double threshold_px) {
+  Impl& m = *impl_;
+  VKLOC_TRY_STATUS(m.checkTracking(Pose::Identity(), level));
+  const auto& L = m.levels[level];
+  const size_t n = static_cast<size_t>(L.camera.width) * L.camera.height;
+  auto staging = m.ctx->createBuffer(static_cast<VkDeviceSize>(n) * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
+  if (!staging.ok()) return staging.error();
+  VKLOC_TRY_STATUS(m.ctx->runOnce([&](VkCommandBuffer c) {
+    VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+    mb.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
+    vkCmdPipelineBarrier(c, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &mb, 0, nullptr,
+                         0, nullptr);
+    VkBufferImageCopy region{};
+    region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+    region.imageExtent = {L.distance.width, L.distance.height, 1};
+    vkCmdCopyImageToBuffer(c, L.distance.image.get(), VK_IMAGE_LAYOUT_GENERAL, staging->buffer.get(), 1, &region);
+    mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
+    mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(c, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr, 0,
+                         nullptr);
+  }));
+  const auto* d = static_cast<const float*>(staging->mapped);
+  size_t near = 0;
+  for (size_t i = 0; i < n; ++i) near += d[i] < threshold_px;
+  return n > 0 ? static_cast<double>(near) / static_cast<double>(n) : 0.0;
+}
+
+int GpuEdgeAlignment::levelCount() const { return stages_->levelCount(); }
+
+PinholeCamera GpuEdgeAlignment::levelCamera(int level) const { return stages_->levelCamera(level); }
+
+float GpuEdgeAlignment::truncationPx(int /*level*/) const { return stages_->truncationPx(); }
+
+Status GpuEdgeAlignment::setPoints(const std::vector<EdgePoint>& points) {
+  if (resident_ && stages_->hasLevelPoints()) {
+    for (int k = 0; k < stages_->levelCount(); ++k) {
+      if (&edgePointsForLevel(*resident_, k) == &points) return Status::success();
+    }
+  }
+  resident_ = nullptr;  // the stages now hold a single list
+  return stages_->setReference(points);
+}
+
+Result<std::vector<float>> GpuEdgeAlignment::residuals(int level, const Pose& T_camera_ref) {
+  return stages_->residuals(T_camera_ref, level);
+}
+
+Result<EdgeNormalEquations> GpuEdgeAlignment::accumulate(int level, const Pose& T_camera_ref, double sigma_px,
+                                                         double nu) {
+  return stages_->accumulate(T_camera_ref, level, sigma_px, nu);
+}
+
+Result<double> GpuEdgeAlignment::nearEdgeFraction(int level, double threshold_px) {
+  return stages_->nearEdgeFraction(level, threshold_px);
 }
 
 Status GpuEdgeStages::Impl::checkTracking(const Pose& T_camera_ref, int level) const {
@@ -719,7 +843,7 @@ EdgePush GpuEdgeStages::Impl::trackingPush(const Pose& T_camera_ref, int level) 
   push.intrinsics[1] = static_cast<float>(cam.fy);
   push.intrinsics[2] = static_cast<float>(cam.cx);
   push.intrinsics[3] = static_cast<float>(cam.cy);
-  push.point_count = point_count;
+  push.point_count = level_offsets.empty() ? point_count : level_counts[level];
   return push;
 }
 
@@ -727,13 +851,14 @@ Result<std::vector<float>> GpuEdgeStages::residuals(const Pose& T_camera_ref, in
   Impl& m = *impl_;
   VKLOC_TRY_STATUS(m.checkTracking(T_camera_ref, level));
   m.timings.clear();
-  if (m.point_count == 0) return std::vector<float>{};
+  const uint32_t count = m.level_offsets.empty() ? m.point_count : m.level_counts[level];
+  if (count == 0) return std::vector<float>{};
   VKLOC_TRY_STATUS(m.begin());
   m.dispatch(kResiduals, level, m.trackingPush(T_camera_ref, level), kGridGroups);
   m.mark("residuals");
   VKLOC_TRY_STATUS(m.submit());
   const auto* r = static_cast<const float*>(m.residuals.mapped);
-  return std::vector<float>(r, r + m.point_count);
+  return std::vector<float>(r, r + count);
 }
 
 Result<EdgeNormalEquations> GpuEdgeStages::accumulate(const Pose& T_camera_ref, int level, double sigma_px, double nu) {
@@ -744,7 +869,7 @@ Result<EdgeNormalEquations> GpuEdgeStages::accumulate(const Pose& T_camera_ref, 
   }
   m.timings.clear();
   EdgeNormalEquations out{};
-  if (m.point_count == 0) return out;
+  if ((m.level_offsets.empty() ? m.point_count : m.level_counts[level]) == 0) return out;
   EdgePush push = m.trackingPush(T_camera_ref, level);
   push.robust[0] = static_cast<float>(sigma_px);
   push.robust[1] = static_cast<float>(nu);

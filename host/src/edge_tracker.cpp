@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 
@@ -20,6 +21,14 @@ double robustCost(const std::vector<float>& residuals, double sigma, double nu, 
   double cost = 0;
   for (float r : residuals) cost += r < 0 ? invalid_cost : std::log1p(static_cast<double>(r) * r * inv);
   return cost;
+}
+
+/// T with its rotation re-orthonormalised (through a normalised quaternion), so that many
+/// compounded increments stay a valid rigid transform (isValidPose tolerates 1e-6).
+Pose orthonormalized(const Pose& T) {
+  Pose out = T;
+  out.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
+  return out;
 }
 
 /// True when the 2x2 bilinear footprint of (u, v) lies inside a w x h image.
@@ -62,14 +71,34 @@ EdgePointEvaluation evaluateEdgePoint(const EdgePoint& point, const Pose& T_came
   const double w10 = a * (1 - b);
   const double w01 = (1 - a) * b;
   const double w11 = a * b;
-  e.residual = w00 * d00 + w10 * d10 + w01 * d01 + w11 * d11;
   e.valid = true;
+  double gu = 0, gv = 0;
+  const ImageF32& L = level.edge_lines;
+  bool on_line = false;
+  if (L.channels == 3 && L.width == D.width && L.height == D.height) {
+    // Near an edge: distance to the sub-pixel edge line, when all four pixels see one edge
+    // (normals within ~37 degrees of each other and of the same sign).
+    const float* l00 = &L.data[(static_cast<size_t>(y0) * L.width + x0) * 3];
+    const float* l10 = l00 + 3;
+    const float* l01 = l00 + static_cast<size_t>(L.width) * 3;
+    const float* l11 = l01 + 3;
+    auto same = [&](const float* q) { return q[1] * l00[1] + q[2] * l00[2] > 0.8f; };
+    if ((l00[1] != 0 || l00[2] != 0) && same(l10) && same(l01) && same(l11)) {
+      const double s = w00 * l00[0] + w10 * l10[0] + w01 * l01[0] + w11 * l11[0];
+      const double sign = s < 0 ? -1.0 : 1.0;
+      e.residual = std::abs(s);
+      gu = sign * (w00 * l00[1] + w10 * l10[1] + w01 * l01[1] + w11 * l11[1]);
+      gv = sign * (w00 * l00[2] + w10 * l10[2] + w01 * l01[2] + w11 * l11[2]);
+      on_line = true;
+    }
+  }
+  if (!on_line) e.residual = w00 * d00 + w10 * d10 + w01 * d01 + w11 * d11;
   if (!with_jacobian) return e;
-  const ImageF32& G = level.field.gradient;
-  const double gu =
-      w00 * G.at(x0, y0, 0) + w10 * G.at(x0 + 1, y0, 0) + w01 * G.at(x0, y0 + 1, 0) + w11 * G.at(x0 + 1, y0 + 1, 0);
-  const double gv =
-      w00 * G.at(x0, y0, 1) + w10 * G.at(x0 + 1, y0, 1) + w01 * G.at(x0, y0 + 1, 1) + w11 * G.at(x0 + 1, y0 + 1, 1);
+  if (!on_line) {
+    const ImageF32& G = level.field.gradient;
+    gu = w00 * G.at(x0, y0, 0) + w10 * G.at(x0 + 1, y0, 0) + w01 * G.at(x0, y0 + 1, 0) + w11 * G.at(x0 + 1, y0 + 1, 0);
+    gv = w00 * G.at(x0, y0, 1) + w10 * G.at(x0 + 1, y0, 1) + w01 * G.at(x0, y0 + 1, 1) + w11 * G.at(x0 + 1, y0 + 1, 1);
+  }
   // dr/dp = [G_u G_v] d(u, v)/dp (eq. 15), then dp/d(delta) = [I | -hat(p)]:
   // the rotation part -dr/dp hat(p) equals (p x dr/dp)^T.
   const double ga = gu * cam.fx * iz;
@@ -175,25 +204,51 @@ Status validateEdgeTrackerOptions(const EdgeTrackerOptions& o) {
   return Status::success();
 }
 
+Status CpuEdgeAlignment::checkLevel(int level) const {
+  if (level < 0 || level >= levelCount()) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("CpuEdgeAlignment: level {} outside 0..{}", level, levelCount() - 1));
+  }
+  return Status::success();
+}
+
+int CpuEdgeAlignment::levelCount() const { return static_cast<int>(live_->levels.size()); }
+
+PinholeCamera CpuEdgeAlignment::levelCamera(int level) const { return live_->levels[level].camera; }
+
+float CpuEdgeAlignment::truncationPx(int level) const { return live_->levels[level].field.truncation_px; }
+
+Status CpuEdgeAlignment::setPoints(const std::vector<EdgePoint>& points) {
+  points_ = points;
+  return Status::success();
+}
+
+Result<std::vector<float>> CpuEdgeAlignment::residuals(int level, const Pose& T_camera_ref) {
+  VKLOC_TRY_STATUS(checkLevel(level));
+  return evaluateEdgeResiduals(points_, T_camera_ref, live_->levels[level]);
+}
+
+Result<EdgeNormalEquations> CpuEdgeAlignment::accumulate(int level, const Pose& T_camera_ref, double sigma_px,
+                                                         double nu) {
+  VKLOC_TRY_STATUS(checkLevel(level));
+  if (!(sigma_px > 0) || !(nu > 0) || !std::isfinite(sigma_px) || !std::isfinite(nu)) {
+    return makeError(ErrorCode::kInvalidArgument, "CpuEdgeAlignment::accumulate: sigma_px and nu must be > 0");
+  }
+  return accumulateEdgeNormalEquations(points_, T_camera_ref, live_->levels[level], sigma_px, nu);
+}
+
+Result<double> CpuEdgeAlignment::nearEdgeFraction(int level, double threshold_px) {
+  VKLOC_TRY_STATUS(checkLevel(level));
+  const std::vector<float>& d = live_->levels[level].field.distance.data;
+  if (d.empty()) return 0.0;
+  size_t near_edge = 0;
+  for (float v : d) near_edge += v < threshold_px;
+  return static_cast<double>(near_edge) / static_cast<double>(d.size());
+}
+
 Result<TrackResult> trackFrame(const EdgeReference& reference, const LiveFrame& live, const Pose& T_world_camera_guess,
                                const EdgeTrackerOptions& options) {
-  VKLOC_TRY_STATUS(validateEdgeTrackerOptions(options));
-  if (!isValidPose(T_world_camera_guess)) {
-    return makeError(ErrorCode::kInvalidArgument, "trackFrame: T_world_camera_guess is not a valid rigid transform");
-  }
-  if (!isValidPose(reference.T_world_ref)) {
-    return makeError(ErrorCode::kInvalidArgument, "trackFrame: reference T_world_ref is not a valid rigid transform");
-  }
-  if (reference.points.empty()) {
-    return makeError(ErrorCode::kInvalidArgument, "trackFrame: reference has no edge points");
-  }
   if (live.levels.empty()) return makeError(ErrorCode::kInvalidArgument, "trackFrame: live frame has no levels");
-  const int levels = static_cast<int>(live.levels.size());
-  if (options.finest_level >= levels) {
-    return makeError(
-        ErrorCode::kInvalidArgument,
-        fmt::format("trackFrame: finest_level {} but the live frame has {} levels", options.finest_level, levels));
-  }
   for (const LiveLevel& level : live.levels) {
     const DistanceField& f = level.field;
     if (f.distance.width != level.camera.width || f.distance.height != level.camera.height ||
@@ -205,22 +260,56 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, const LiveFrame& 
                        "trackFrame: a live level's distance field does not match its camera");
     }
   }
+  CpuEdgeAlignment backend(live);
+  return trackFrame(reference, backend, T_world_camera_guess, options);
+}
+
+Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBackend& backend,
+                               const Pose& T_world_camera_guess, const EdgeTrackerOptions& options) {
+  VKLOC_TRY_STATUS(validateEdgeTrackerOptions(options));
+  if (!isValidPose(T_world_camera_guess)) {
+    return makeError(ErrorCode::kInvalidArgument, "trackFrame: T_world_camera_guess is not a valid rigid transform");
+  }
+  if (!isValidPose(reference.T_world_ref)) {
+    return makeError(ErrorCode::kInvalidArgument, "trackFrame: reference T_world_ref is not a valid rigid transform");
+  }
+  if (reference.points.empty()) {
+    return makeError(ErrorCode::kInvalidArgument, "trackFrame: reference has no edge points");
+  }
+  const int levels = backend.levelCount();
+  if (levels <= 0) return makeError(ErrorCode::kInvalidArgument, "trackFrame: live frame has no levels");
+  if (options.finest_level >= levels) {
+    return makeError(
+        ErrorCode::kInvalidArgument,
+        fmt::format("trackFrame: finest_level {} but the live frame has {} levels", options.finest_level, levels));
+  }
   const int coarsest = options.coarsest_level < 0 ? levels - 1 : std::min(options.coarsest_level, levels - 1);
   auto pointsFor = [&](int level) -> const std::vector<EdgePoint>& { return edgePointsForLevel(reference, level); };
 
-  const Pose T_camera_ref_guess = T_world_camera_guess.inverse() * reference.T_world_ref;
+  const Pose T_camera_ref_guess = orthonormalized(T_world_camera_guess.inverse() * reference.T_world_ref);
   Pose T = T_camera_ref_guess;
   int iterations = 0;
+  const std::vector<EdgePoint>* uploaded = nullptr;
+  auto usePoints = [&](const std::vector<EdgePoint>& points) -> Status {
+    if (uploaded == &points) return Status::success();
+    VKLOC_TRY_STATUS(backend.setPoints(points));
+    uploaded = &points;
+    return Status::success();
+  };
   for (int level_index = coarsest; level_index >= options.finest_level; --level_index) {
-    const LiveLevel& level = live.levels[level_index];
     const std::vector<EdgePoint>& points = pointsFor(level_index);
     if (points.size() < 6) continue;
-    const double trunc = level.field.truncation_px;
-    std::vector<float> residuals = evaluateEdgeResiduals(points, T, level);
+    VKLOC_TRY_STATUS(usePoints(points));
+    const double trunc = backend.truncationPx(level_index);
+    auto first = backend.residuals(level_index, T);
+    if (!first.ok()) return first.error();
+    std::vector<float> residuals = std::move(first).value();
     double lambda = 0;
     for (int it = 0; it < options.max_iterations; ++it) {
       const double sigma = estimateTDistributionScale(residuals, options.nu, options.scale_iterations);
-      const EdgeNormalEquations eq = accumulateEdgeNormalEquations(points, T, level, sigma, options.nu);
+      auto accumulated = backend.accumulate(level_index, T, sigma, options.nu);
+      if (!accumulated.ok()) return accumulated.error();
+      const EdgeNormalEquations& eq = *accumulated;
       if (eq[kEdgeNormalCountIndex] < 6) break;
       Matrix6d H;
       Vector6d g;
@@ -244,8 +333,10 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, const LiveFrame& 
       }
       if (!solved) break;
       ++iterations;
-      const Pose T_new = applyLeftIncrement(T, delta);
-      std::vector<float> residuals_new = evaluateEdgeResiduals(points, T_new, level);
+      const Pose T_new = orthonormalized(applyLeftIncrement(T, delta));
+      auto evaluated = backend.residuals(level_index, T_new);
+      if (!evaluated.ok()) return evaluated.error();
+      std::vector<float> residuals_new = std::move(evaluated).value();
       const double cost_old = robustCost(residuals, sigma, options.nu, trunc);
       const double cost_new = robustCost(residuals_new, sigma, options.nu, trunc);
       if (cost_new <= cost_old) {
@@ -261,28 +352,33 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, const LiveFrame& 
   }
 
   // Quality and covariance on the finest level used.
-  const LiveLevel& finest = live.levels[options.finest_level];
-  const std::vector<EdgePoint>& points = pointsFor(options.finest_level);
+  const int finest_index = options.finest_level;
+  const PinholeCamera finest = backend.levelCamera(finest_index);
+  const std::vector<EdgePoint>& points = pointsFor(finest_index);
+  VKLOC_TRY_STATUS(usePoints(points));
   TrackResult result;
   result.T_camera_ref = T;
-  result.T_world_camera = reference.T_world_ref * T.inverse();
+  result.T_world_camera = orthonormalized(reference.T_world_ref * T.inverse());
   TrackQuality& q = result.quality;
   q.iterations = iterations;
+  auto final_residuals = backend.residuals(finest_index, T);
+  if (!final_residuals.ok()) return final_residuals.error();
+  const std::vector<float>& residuals = *final_residuals;
   int inliers = 0;
   double inlier_sum = 0;
-  std::vector<float> residuals(points.size(), kInvalidResidual);
   for (size_t i = 0; i < points.size(); ++i) {
-    const EdgePointEvaluation e = evaluateEdgePoint(points[i], T, finest, false);
     const Eigen::Vector3d p = T * Eigen::Vector3d(points[i].x, points[i].y, points[i].z);
-    if (p.z() > 1e-6 && footprintInside(e.u, e.v, finest.field.distance.width, finest.field.distance.height)) {
-      ++q.points_in_image;
+    if (p.z() > 1e-6) {
+      const double u = finest.fx * p.x() / p.z() + finest.cx;
+      const double v = finest.fy * p.y() / p.z() + finest.cy;
+      if (footprintInside(u, v, finest.width, finest.height)) ++q.points_in_image;
     }
-    if (!e.valid) continue;
-    residuals[i] = static_cast<float>(e.residual);
+    const float r = i < residuals.size() ? residuals[i] : kInvalidResidual;
+    if (r < 0) continue;
     ++q.points_used;
-    if (e.residual < options.inlier_threshold_px) {
+    if (r < options.inlier_threshold_px) {
       ++inliers;
-      inlier_sum += e.residual;
+      inlier_sum += r;
     }
   }
   q.inlier_ratio = q.points_in_image > 0 ? static_cast<double>(inliers) / q.points_in_image : 0.0;
@@ -293,7 +389,7 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, const LiveFrame& 
     for (const EdgePoint& point : points) {
       const Eigen::Vector3d p = T_cr * Eigen::Vector3d(point.x, point.y, point.z);
       if (!(p.z() > 1e-6)) continue;
-      const Eigen::Vector2d uv(finest.camera.fx * p.x() / p.z(), finest.camera.fy * p.y() / p.z());
+      const Eigen::Vector2d uv(finest.fx * p.x() / p.z(), finest.fy * p.y() / p.z());
       sum += uv;
       sum2 += uv.cwiseProduct(uv);
       ++n;
@@ -304,15 +400,17 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, const LiveFrame& 
   };
   const double spread_ref = spread(Pose::Identity());
   q.spread_ratio = spread_ref > 0 ? spread(T) / spread_ref : 0.0;
-  size_t near_edge = 0;
-  for (float d : finest.field.distance.data) near_edge += d < options.inlier_threshold_px;
-  q.chance_inlier_ratio = static_cast<double>(near_edge) / static_cast<double>(finest.field.distance.data.size());
+  auto chance = backend.nearEdgeFraction(finest_index, options.inlier_threshold_px);
+  if (!chance.ok()) return chance.error();
+  q.chance_inlier_ratio = *chance;
   const double above_chance =
       q.chance_inlier_ratio < 1.0 ? (q.inlier_ratio - q.chance_inlier_ratio) / (1.0 - q.chance_inlier_ratio) : 0.0;
   q.visible_ratio = static_cast<double>(q.points_in_image) / static_cast<double>(points.size());
   q.mean_residual_px = inliers > 0 ? inlier_sum / inliers : 0.0;
   q.scale_px = estimateTDistributionScale(residuals, options.nu, options.scale_iterations);
-  const EdgeNormalEquations eq = accumulateEdgeNormalEquations(points, T, finest, q.scale_px, options.nu);
+  auto final_eq = backend.accumulate(finest_index, T, q.scale_px, options.nu);
+  if (!final_eq.ok()) return final_eq.error();
+  const EdgeNormalEquations& eq = *final_eq;
   Matrix6d H;
   Vector6d g;
   unpackEdgeNormalEquations(eq, H, g);

@@ -44,7 +44,79 @@ Status validateEdgeDetectorOptions(const EdgeDetectorOptions& o) {
   return Status::success();
 }
 
+namespace {
+
+/// Sobel / 8 gradients and magnitude of the image edges were detected on, and the detector's
+/// other working buffers (kept between calls so that repeated frames do not allocate).
+struct EdgeGradients {
+  cv::Mat gx, gy, mag;
+  std::vector<float> sample;
+  std::vector<uint8_t> state;
+  std::vector<int> stack;
+};
+
+/// Gives `image` the size w x h x c with every value `fill`, reusing its memory.
+template <typename T>
+void resetImage(Image<T>& image, int w, int h, int c, T fill) {
+  image.width = w;
+  image.height = h;
+  image.channels = c;
+  image.data.assign(static_cast<size_t>(w) * h * c, fill);
+}
+
+/// Step (dx, dy) of the non-maximum suppression direction of a gradient (gx, gy): the gradient
+/// direction quantised to 4 directions.
+inline void nmsDirection(float gx, float gy, int& dx, int& dy) {
+  const float tan22 = 0.41421356f;  // tan(22.5 deg)
+  const float ax = std::abs(gx);
+  const float ay = std::abs(gy);
+  if (ay <= tan22 * ax) {
+    dx = 1;
+    dy = 0;
+  } else if (ax <= tan22 * ay) {
+    dx = 0;
+    dy = 1;
+  } else if ((gx > 0) == (gy > 0)) {
+    dx = 1;
+    dy = 1;
+  } else {
+    dx = -1;
+    dy = 1;
+  }
+}
+
+/// Sub-pixel position of the edge through interior pixel (x, y), relative to its centre: the
+/// vertex of the parabola through the gradient magnitudes at the pixel and its two neighbours
+/// along the suppression direction (|offset| <= half a step; an ideal step's symmetric 2-pixel
+/// edge gives the point between both pixels).
+inline void subpixelOffset(const EdgeGradients& g, int x, int y, float& du, float& dv) {
+  int dx = 0, dy = 0;
+  nmsDirection(g.gx.at<float>(y, x), g.gy.at<float>(y, x), dx, dy);
+  const float m0 = g.mag.at<float>(y, x);
+  const float a = g.mag.at<float>(y - dy, x - dx);
+  const float b = g.mag.at<float>(y + dy, x + dx);
+  const float denominator = a - 2.0f * m0 + b;
+  float t = denominator < 0 ? 0.5f * (a - b) / denominator : 0.0f;
+  t = std::clamp(t, -0.5f, 0.5f);
+  du = t * static_cast<float>(dx);
+  dv = t * static_cast<float>(dy);
+}
+
+Status detectEdgesImpl(const ImageF32& gray, const EdgeDetectorOptions& options, EdgeGradients& g, ImageU8& edges);
+
+}  // namespace
+
 Result<ImageU8> detectEdges(const ImageF32& gray, const EdgeDetectorOptions& options) {
+  EdgeGradients scratch;
+  ImageU8 edges;
+  VKLOC_TRY_STATUS(detectEdgesImpl(gray, options, scratch, edges));
+  return edges;
+}
+
+namespace {
+
+/// detectEdges into `edges`, leaving the gradients in `g`.
+Status detectEdgesImpl(const ImageF32& gray, const EdgeDetectorOptions& options, EdgeGradients& g, ImageU8& edges) {
   VKLOC_TRY_STATUS(validateEdgeDetectorOptions(options));
   if (gray.empty() || gray.channels != 1 || gray.data.size() != static_cast<size_t>(gray.width) * gray.height) {
     return makeError(ErrorCode::kInvalidArgument, "detectEdges: expected a non-empty single-channel image");
@@ -52,14 +124,16 @@ Result<ImageU8> detectEdges(const ImageF32& gray, const EdgeDetectorOptions& opt
   const int w = gray.width;
   const int h = gray.height;
   const cv::Mat src = wrap(gray);
-  cv::Mat gx, gy;
+  cv::Mat& gx = g.gx;
+  cv::Mat& gy = g.gy;
+  cv::Mat& mag = g.mag;
   cv::Sobel(src, gx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
   cv::Sobel(src, gy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
-  cv::Mat mag;
   cv::magnitude(gx, gy, mag);
 
   // Contrast: quantile of the magnitude over a 2x2-strided sample of the pixels.
-  std::vector<float> sample;
+  std::vector<float>& sample = g.sample;
+  sample.clear();
   sample.reserve(static_cast<size_t>((w + 1) / 2) * ((h + 1) / 2));
   for (int y = 0; y < h; y += 2) {
     const float* row = mag.ptr<float>(y);
@@ -72,7 +146,8 @@ Result<ImageU8> detectEdges(const ImageF32& gray, const EdgeDetectorOptions& opt
   const float low = static_cast<float>(options.low_ratio * high);
 
   // Non-maximum suppression: 0 = suppressed, 1 = weak candidate, 2 = strong.
-  ImageU8 state(w, h, 1, 0);
+  std::vector<uint8_t>& state = g.state;
+  state.assign(static_cast<size_t>(w) * h, 0);
   const float tan22 = 0.41421356f;  // tan(22.5 deg)
   for (int y = 1; y < h - 1; ++y) {
     const float* m0 = mag.ptr<float>(y - 1);
@@ -99,15 +174,16 @@ Result<ImageU8> detectEdges(const ImageF32& gray, const EdgeDetectorOptions& opt
         a = m0[x + 1];
         b = m2[x - 1];
       }
-      if (m >= a && m >= b && (m > a || m > b)) state.at(x, y) = m >= high ? 2 : 1;
+      if (m >= a && m >= b && (m > a || m > b)) state[static_cast<size_t>(y) * w + x] = m >= high ? 2 : 1;
     }
   }
 
   // Hysteresis: grow from strong pixels through 8-connected weak ones.
-  ImageU8 edges(w, h, 1, 0);
-  std::vector<int> stack;
+  resetImage<uint8_t>(edges, w, h, 1, 0);
+  std::vector<int>& stack = g.stack;
+  stack.clear();
   for (int i = 0; i < w * h; ++i) {
-    if (state.data[i] != 2) continue;
+    if (state[i] != 2) continue;
     edges.data[i] = 255;
     stack.push_back(i);
     while (!stack.empty()) {
@@ -121,15 +197,17 @@ Result<ImageU8> detectEdges(const ImageF32& gray, const EdgeDetectorOptions& opt
           const int qy = py + dy2;
           if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
           const int q = qy * w + qx;
-          if (state.data[q] == 0 || edges.data[q] != 0) continue;
+          if (state[q] == 0 || edges.data[q] != 0) continue;
           edges.data[q] = 255;
           stack.push_back(q);
         }
       }
     }
   }
-  return edges;
+  return Status::success();
 }
+
+}  // namespace
 
 // --- pyramid and distance fields ---------------------------------------------------------------
 
@@ -181,7 +259,10 @@ ImageF32 downsampleHalf(const ImageF32& image) {
   return out;
 }
 
-Result<DistanceField> computeDistanceField(const ImageU8& edges, float truncation_px) {
+namespace {
+
+/// computeDistanceField into `field`, reusing its memory and the scratch `inverted`.
+Status computeDistanceFieldInto(const ImageU8& edges, float truncation_px, DistanceField& field, cv::Mat& inverted) {
   if (edges.empty() || edges.channels != 1 || edges.data.size() != static_cast<size_t>(edges.width) * edges.height) {
     return makeError(ErrorCode::kInvalidArgument, "computeDistanceField: expected a non-empty single-channel edge map");
   }
@@ -190,12 +271,11 @@ Result<DistanceField> computeDistanceField(const ImageU8& edges, float truncatio
   }
   const int w = edges.width;
   const int h = edges.height;
-  DistanceField field;
   field.truncation_px = truncation_px;
-  field.distance = ImageF32(w, h, 1, truncation_px);
-  field.gradient = ImageF32(w, h, 2, 0.0f);
+  resetImage(field.distance, w, h, 1, truncation_px);
+  resetImage(field.gradient, w, h, 2, 0.0f);
   // distanceTransform measures the distance to the nearest zero pixel: edges become zeros.
-  cv::Mat inverted(h, w, CV_8U);
+  inverted.create(h, w, CV_8U);
   bool any_edge = false;
   for (int y = 0; y < h; ++y) {
     uint8_t* dst = inverted.ptr<uint8_t>(y);
@@ -205,39 +285,111 @@ Result<DistanceField> computeDistanceField(const ImageU8& edges, float truncatio
       any_edge = any_edge || src[x];
     }
   }
-  if (!any_edge) return field;
+  if (!any_edge) return Status::success();
   cv::Mat dist(h, w, CV_32F, field.distance.data.data());
   cv::distanceTransform(inverted, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
-  for (float& d : field.distance.data) d = std::min(d, truncation_px);
+  const float t = truncation_px;
+  for (float& d : field.distance.data) d = std::min(d, t);
 
   // Central differences inside, one-sided on the border; zero where a value used is truncated.
-  const ImageF32& D = field.distance;
+  const float* D = field.distance.data.data();
+  float* G = field.gradient.data.data();
   for (int y = 0; y < h; ++y) {
+    const float* row = D + static_cast<size_t>(y) * w;
+    const int ylo = std::max(y - 1, 0);
+    const int yhi = std::min(y + 1, h - 1);
+    const float* up = D + static_cast<size_t>(ylo) * w;
+    const float* down = D + static_cast<size_t>(yhi) * w;
+    const float inv_dy = yhi > ylo ? 1.0f / static_cast<float>(yhi - ylo) : 0.0f;
+    float* out = G + static_cast<size_t>(y) * w * 2;
     for (int x = 0; x < w; ++x) {
-      float g[2] = {0, 0};
-      for (int axis = 0; axis < 2; ++axis) {
-        const int n = axis == 0 ? w : h;
-        const int c = axis == 0 ? x : y;
-        if (n < 2) continue;
-        const int lo = std::max(c - 1, 0);
-        const int hi = std::min(c + 1, n - 1);
-        const float a = axis == 0 ? D.at(lo, y) : D.at(x, lo);
-        const float b = axis == 0 ? D.at(hi, y) : D.at(x, hi);
-        if (a >= truncation_px || b >= truncation_px || D.at(x, y) >= truncation_px) continue;
-        g[axis] = (b - a) / static_cast<float>(hi - lo);
+      const float c = row[x];
+      if (c >= t) continue;
+      if (w >= 2) {
+        const int xlo = std::max(x - 1, 0);
+        const int xhi = std::min(x + 1, w - 1);
+        const float a = row[xlo];
+        const float b = row[xhi];
+        if (a < t && b < t) out[2 * x] = (b - a) / static_cast<float>(xhi - xlo);
       }
-      field.gradient.at(x, y, 0) = g[0];
-      field.gradient.at(x, y, 1) = g[1];
+      if (h >= 2) {
+        const float a = up[x];
+        const float b = down[x];
+        if (a < t && b < t) out[2 * x + 1] = (b - a) * inv_dy;
+      }
     }
   }
+  return Status::success();
+}
+
+}  // namespace
+
+Result<DistanceField> computeDistanceField(const ImageU8& edges, float truncation_px) {
+  DistanceField field;
+  cv::Mat inverted;
+  VKLOC_TRY_STATUS(computeDistanceFieldInto(edges, truncation_px, field, inverted));
   return field;
 }
 
+namespace {
+
+/// LiveLevel::edge_lines of an edge map: every edge pixel splats its sub-pixel line into the
+/// pixels within kEdgeLineRadiusPx of its edge point; a pixel keeps the nearest edge point.
+void computeEdgeLines(const ImageU8& edges, const EdgeGradients& g, ImageF32& lines, std::vector<float>& best) {
+  const int w = edges.width;
+  const int h = edges.height;
+  resetImage(lines, w, h, 3, 0.0f);
+  best.assign(static_cast<size_t>(w) * h, kEdgeLineRadiusPx * kEdgeLineRadiusPx);
+  const int r = static_cast<int>(std::ceil(kEdgeLineRadiusPx));
+  for (int y = 1; y < h - 1; ++y) {
+    const uint8_t* row = &edges.data[static_cast<size_t>(y) * w];
+    for (int x = 1; x < w - 1; ++x) {
+      if (!row[x]) continue;
+      const float gx = g.gx.at<float>(y, x);
+      const float gy = g.gy.at<float>(y, x);
+      const float m = std::sqrt(gx * gx + gy * gy);
+      if (!(m > 0)) continue;
+      const float nu = gx / m;
+      const float nv = gy / m;
+      float du = 0, dv = 0;
+      subpixelOffset(g, x, y, du, dv);
+      const float eu = static_cast<float>(x) + du;
+      const float ev = static_cast<float>(y) + dv;
+      for (int qy = std::max(y - r, 0); qy <= std::min(y + r, h - 1); ++qy) {
+        for (int qx = std::max(x - r, 0); qx <= std::min(x + r, w - 1); ++qx) {
+          const float ou = static_cast<float>(qx) - eu;
+          const float ov = static_cast<float>(qy) - ev;
+          const float d2 = ou * ou + ov * ov;
+          float& b = best[static_cast<size_t>(qy) * w + qx];
+          if (d2 >= b) continue;
+          b = d2;
+          float* out = &lines.data[(static_cast<size_t>(qy) * w + qx) * 3];
+          out[0] = nu * ou + nv * ov;
+          out[1] = nu;
+          out[2] = nv;
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
 Result<LiveFrame> buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const LiveFrameOptions& options) {
+  LiveFrame frame;
+  VKLOC_TRY_STATUS(buildLiveFrame(gray, camera, options, frame));
+  return frame;
+}
+
+Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const LiveFrameOptions& options,
+                      LiveFrame& frame) {
   VKLOC_TRY_STATUS(validateCamera(camera));
   VKLOC_TRY_STATUS(validateEdgeDetectorOptions(options.detector));
   if (options.levels < 1 || options.levels > 8) {
     return makeError(ErrorCode::kInvalidArgument, "buildLiveFrame: levels must be in 1..8");
+  }
+  if (!(options.truncation_px > 0) || !std::isfinite(options.truncation_px)) {
+    return makeError(ErrorCode::kInvalidArgument, "buildLiveFrame: truncation_px must be > 0 and finite");
   }
   if (gray.channels != 1 || gray.width != camera.width || gray.height != camera.height ||
       gray.data.size() != static_cast<size_t>(gray.width) * gray.height) {
@@ -245,27 +397,51 @@ Result<LiveFrame> buildLiveFrame(const ImageU8& gray, const PinholeCamera& camer
                      fmt::format("buildLiveFrame: image is {}x{}x{}, camera expects {}x{} single-channel", gray.width,
                                  gray.height, gray.channels, camera.width, camera.height));
   }
-  LiveFrame frame;
-  ImageF32 level_gray = toFloat(gray);
+  // Working buffers kept per thread: a frame at a time allocates nothing once warm.
+  struct Scratch {
+    std::vector<ImageF32> gray;
+    EdgeGradients gradients;
+    ImageU8 edges;
+    cv::Mat inverted;
+    std::vector<float> best;
+  };
+  thread_local Scratch scratch;
+  int built = 0;
   for (int level = 0; level < options.levels; ++level) {
-    if (level > 0) {
-      if (level_gray.width < 16 || level_gray.height < 16) break;
-      level_gray = downsampleHalf(level_gray);
+    if (static_cast<int>(scratch.gray.size()) <= level) scratch.gray.resize(static_cast<size_t>(level) + 1);
+    ImageF32& level_gray = scratch.gray[static_cast<size_t>(level)];
+    if (level == 0) {
+      resetImage(level_gray, gray.width, gray.height, 1, 0.0f);
+      for (size_t i = 0; i < gray.data.size(); ++i) level_gray.data[i] = gray.data[i];
+    } else {
+      const ImageF32& finer = scratch.gray[static_cast<size_t>(level) - 1];
+      if (finer.width < 16 || finer.height < 16) break;
+      level_gray = downsampleHalf(finer);
     }
-    LiveLevel out;
+    if (static_cast<int>(frame.levels.size()) <= level) frame.levels.resize(static_cast<size_t>(level) + 1);
+    LiveLevel& out = frame.levels[static_cast<size_t>(level)];
     out.camera = pyramidCamera(camera, level);
-    auto edges = detectEdges(level_gray, options.detector);
-    if (!edges.ok()) return edges.error();
-    auto field = computeDistanceField(*edges, options.truncation_px);
-    if (!field.ok()) return field.error();
-    out.field = std::move(field).value();
-    if (options.keep_intermediate) {
-      out.gray = level_gray;
-      out.edges = std::move(edges).value();
+    ImageU8& edges = options.keep_intermediate ? out.edges : scratch.edges;
+    VKLOC_TRY_STATUS(detectEdgesImpl(level_gray, options.detector, scratch.gradients, edges));
+    VKLOC_TRY_STATUS(computeDistanceFieldInto(edges, options.truncation_px, out.field, scratch.inverted));
+    if (options.subpixel_edges) {
+      computeEdgeLines(edges, scratch.gradients, out.edge_lines, scratch.best);
+    } else {
+      out.edge_lines = ImageF32{};
     }
-    frame.levels.push_back(std::move(out));
+    if (options.keep_intermediate) {
+      out.gray.width = level_gray.width;
+      out.gray.height = level_gray.height;
+      out.gray.channels = 1;
+      out.gray.data.assign(level_gray.data.begin(), level_gray.data.end());
+    } else {
+      out.gray = ImageF32{};
+      out.edges = ImageU8{};
+    }
+    built = level + 1;
   }
-  return frame;
+  frame.levels.resize(static_cast<size_t>(built));
+  return Status::success();
 }
 
 // --- reference edges ----------------------------------------------------------------------------
@@ -334,7 +510,10 @@ ReferenceLevel downsampleReference(const ReferenceLevel& in) {
   return out;
 }
 
-Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const ReferenceEdgeOptions& options) {
+/// Stage 1 (detectReferenceEdges); when texture_offsets is given it receives, per texture edge
+/// pixel, the sub-pixel offset (du, dv) of the edge from the pixel centre (2 channels, pixels).
+Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const ReferenceEdgeOptions& options,
+                                         ImageF32* texture_offsets = nullptr) {
   const int w = view.depth.width;
   const int h = view.depth.height;
   const bool have_normals =
@@ -376,8 +555,11 @@ Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const Refer
     }
   }
   if (options.texture_edges) {
-    auto edges = detectEdges(view.gray, options.detector);
-    if (!edges.ok()) return edges.error();
+    EdgeGradients gradients;
+    ImageU8 edge_map;
+    VKLOC_TRY_STATUS(detectEdgesImpl(view.gray, options.detector, gradients, edge_map));
+    const ImageU8* edges = &edge_map;
+    if (texture_offsets) *texture_offsets = ImageF32(w, h, 2, 0.0f);
     // A geometric edge that shows in the gray image is represented by its texture edge pixels
     // (found by the same detector as the live image's edges, so both place it alike); the
     // geometric flags next to such pixels are dropped.
@@ -395,7 +577,11 @@ Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const Refer
             flags.at(nx, ny) &= kEdgePixelTexture;
           }
         }
-        if (has_surface) flags.at(x, y) |= kEdgePixelTexture;
+        if (has_surface) {
+          flags.at(x, y) |= kEdgePixelTexture;
+          if (texture_offsets)
+            subpixelOffset(gradients, x, y, texture_offsets->at(x, y, 0), texture_offsets->at(x, y, 1));
+        }
       }
     }
   }
@@ -414,8 +600,11 @@ Result<ImageU8> detectReferenceEdges(const RenderOutput& view, const ReferenceEd
   return detectReferenceEdgesImpl(ReferenceLevel{toFloat(view.gray), view.depth, view.normals}, options);
 }
 
-std::vector<EdgePoint> backProjectEdges(const ImageU8& flags, const ImageF32& depth, const PinholeCamera& camera,
-                                        const ReferenceEdgeOptions& options) {
+namespace {
+
+/// Stage 2 (backProjectEdges); texture edge points are moved by texture_offsets when given.
+std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32& depth, const PinholeCamera& camera,
+                                            const ReferenceEdgeOptions& options, const ImageF32* texture_offsets) {
   std::vector<EdgePoint> points;
   const int w = flags.width;
   const int h = flags.height;
@@ -461,7 +650,11 @@ std::vector<EdgePoint> backProjectEdges(const ImageU8& flags, const ImageF32& de
             if (z <= 0 || zn < z) z = zn;
           }
         }
-        if (z > 0) emit(x, y, z, kEdgeTexture);
+        if (z > 0) {
+          const bool offset = texture_offsets && texture_offsets->width == w && texture_offsets->height == h;
+          emit(x + (offset ? texture_offsets->at(x, y, 0) : 0.0), y + (offset ? texture_offsets->at(x, y, 1) : 0.0), z,
+               kEdgeTexture);
+        }
       }
       if (zp <= 0) continue;
       for (const Dir& d : kOcclusion) {
@@ -483,6 +676,13 @@ std::vector<EdgePoint> backProjectEdges(const ImageU8& flags, const ImageF32& de
     }
   }
   return points;
+}
+
+}  // namespace
+
+std::vector<EdgePoint> backProjectEdges(const ImageU8& flags, const ImageF32& depth, const PinholeCamera& camera,
+                                        const ReferenceEdgeOptions& options) {
+  return backProjectEdgesImpl(flags, depth, camera, options, nullptr);
 }
 
 std::vector<EdgePoint> subsampleEdgePoints(const std::vector<EdgePoint>& points, const PinholeCamera& camera,
@@ -559,10 +759,11 @@ Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const Pinhole
       level = downsampleReference(level);
     }
     const PinholeCamera level_camera = pyramidCamera(camera, k);
-    auto flags = detectReferenceEdgesImpl(level, options);
+    ImageF32 offsets;
+    auto flags = detectReferenceEdgesImpl(level, options, &offsets);
     if (!flags.ok()) return flags.error();
-    std::vector<EdgePoint> points =
-        subsampleEdgePoints(backProjectEdges(*flags, level.depth, level_camera, options), level_camera, options);
+    std::vector<EdgePoint> points = subsampleEdgePoints(
+        backProjectEdgesImpl(*flags, level.depth, level_camera, options, &offsets), level_camera, options);
     if (k == 0) {
       ref.points = std::move(points);
     } else {

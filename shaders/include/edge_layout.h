@@ -34,19 +34,22 @@ namespace vkloc::engine {
 #define EDGE_BINDING_POINTS 13      // SSBO: EdgePoint[] (vec4: x, y, z metres, kind bits)
 #define EDGE_BINDING_RESIDUALS 14   // SSBO: float[] residual per point (pixels), -1 = invalid
 #define EDGE_BINDING_PARTIALS 15    // SSBO: vec4[group * 8 + k] per-workgroup normal equations
-#define EDGE_BINDING_COUNT 16
+#define EDGE_BINDING_LINES 16       // rgba32f: sub-pixel edge line (s, n_u, n_v, 0), LiveLevel::edge_lines
+#define EDGE_BINDING_COUNT 17
 
 #define EDGE_HIST_BINS 2048u
 #define EDGE_MAX_HYSTERESIS_PASSES 64
 #define EDGE_NO_SEED 0xffffffffu
-#define EDGE_REDUCE_VEC4S 8  // 29 values of the normal equations in 8 vec4s (3 unused)
+#define EDGE_LINE_RADIUS_PX 2.0  // kEdgeLineRadiusPx of edges.hpp, pixels of a level
+#define EDGE_REDUCE_VEC4S 8      // 29 values of the normal equations in 8 vec4s (3 unused)
 
 // Push constants shared by all edge shaders (fields unused by a shader are ignored). 128 bytes.
 struct EdgePush {
   VKLOC_INT(width);                // Size of this level, pixels.
   VKLOC_INT(height);               // Pixels.
   VKLOC_INT(step);                 // JFA step (pixels); histogram / select pass; hysteresis pass slot.
-  VKLOC_UINT(flags);               // JFA / distance: 1 = read SEED_B (write SEED_A), 0 = the reverse.
+  VKLOC_UINT(flags);               // JFA / distance: 1 = read SEED_B (write SEED_A), 0 = the reverse;
+                                   // edge lines: 1 = build them, 0 = write zeros.
   VKLOC_FLOAT(high_factor);        // EdgeDetectorOptions::high_factor.
   VKLOC_FLOAT(min_high_gradient);  // EdgeDetectorOptions::min_high_gradient, gray levels per pixel.
   VKLOC_FLOAT(low_ratio);          // EdgeDetectorOptions::low_ratio.

@@ -83,7 +83,12 @@ struct LiveFrameOptions {
   float truncation_px = 20.0f;    ///< Distance truncation at every level, in that level's pixels.
   EdgeDetectorOptions detector;   ///< Edge detector used at every level.
   bool keep_intermediate = true;  ///< Keep gray and edge images per level (for display/tests).
+  bool subpixel_edges = true;     ///< Also build LiveLevel::edge_lines (sub-pixel edge lines).
 };
+
+/// Radius (pixels of a level) around live edge pixels within which LiveLevel::edge_lines is
+/// filled; beyond it only the distance field is used.
+constexpr float kEdgeLineRadiusPx = 2.0f;
 
 /// One pyramid level of a live frame.
 struct LiveLevel {
@@ -91,6 +96,13 @@ struct LiveLevel {
   ImageF32 gray;         ///< Low-passed gray image (empty unless keep_intermediate).
   ImageU8 edges;         ///< Edge map, 255 = edge (empty unless keep_intermediate).
   DistanceField field;   ///< Distance to the nearest edge and its gradient.
+  /// Sub-pixel edge lines near the edges, 3 channels (s, n_u, n_v) per pixel, or empty (not
+  /// built, e.g. a frame read back from a GPU backend): n is the unit intensity-gradient normal
+  /// of the nearest live edge pixel within kEdgeLineRadiusPx (distance to its sub-pixel edge
+  /// point e, the parabola vertex of the gradient magnitude across the edge) and
+  /// s = n . ((u, v) - e) the signed distance (pixels) from the pixel centre to the straight edge
+  /// line through e. (0, 0, 0) where no edge pixel is that near.
+  ImageF32 edge_lines;
 };
 
 /// The live image prepared for tracking: distance fields per level, finest (0) first.
@@ -104,6 +116,12 @@ struct LiveFrame {
 /// not built (fewer levels are returned).
 Result<LiveFrame> buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera,
                                  const LiveFrameOptions& options = {});
+
+/// buildLiveFrame into an existing frame, reusing its images' memory (and per-thread working
+/// buffers), so that a stream of frames of one size allocates nothing once warm. Same results
+/// and errors; on error `frame` is left in an unspecified but valid state.
+Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const LiveFrameOptions& options,
+                      LiveFrame& frame);
 
 // --- reference view: 3D edge points ---------------------------------------------------------
 

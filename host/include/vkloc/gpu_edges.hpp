@@ -7,7 +7,8 @@
 //   magnitude's float bits, three histogram passes on the GPU, nothing read back) -> thresholds
 //   -> non-maximum suppression -> hysteresis (passes over the weak candidates until one changes
 //   nothing; the only host round trip) -> jump flooding JFA+2 from step 2^ceil(log2(truncation))
-//   -> truncated distance -> gradient (G_u, G_v).
+//   -> truncated distance -> gradient (G_u, G_v) -> sub-pixel edge lines (LiveLevel::edge_lines,
+//   when LiveFrameOptions::subpixel_edges), which residuals/accumulate use as the CPU does.
 // Tracking (residuals, accumulate): per reference point the residual and the 29 values of the
 // normal equations (EdgeNormalEquations), reduced on the GPU into per-workgroup partials that
 // the host sums in double.
@@ -52,8 +53,9 @@ class GpuEdgeStages {
   /// the results stay on the device. kInvalidArgument for a wrong size or channel count.
   Status processLiveImage(const ImageU8& gray);
 
-  /// Reads the last live frame back: per level camera, gray, edges (255 = edge) and distance
-  /// field, as buildLiveFrame returns them. kInvalidArgument before processLiveImage.
+  /// Reads the last live frame back: per level camera, gray, edges (255 = edge), distance field
+  /// and edge lines (with subpixel_edges), as buildLiveFrame returns them. kInvalidArgument
+  /// before processLiveImage.
   Result<LiveFrame> readLiveFrame();
 
   /// Hysteresis passes run per level in the last processLiveImage (the last one changed nothing
@@ -76,6 +78,21 @@ class GpuEdgeStages {
   /// sigma_px <= 0 or nu <= 0.
   Result<EdgeNormalEquations> accumulate(const Pose& T_camera_ref, int level, double sigma_px, double nu);
 
+  /// Uploads one point list per pyramid level (level k: edgePointsForLevel(reference, k)) in
+  /// one buffer; residuals/accumulate on level k then use level k's list, so a tracker switches
+  /// levels without uploading again. Replaces the previous reference (as setReference does).
+  Status setLevelPoints(const EdgeReference& reference);
+  /// True while the lists of the last setLevelPoints are resident (no setReference since).
+  bool hasLevelPoints() const;
+
+  /// Fraction (0..1) of the pixels of `level` of the last live frame whose distance to the
+  /// nearest edge is below threshold_px (that level's pixels). kInvalidArgument for a bad level
+  /// or before processLiveImage.
+  Result<double> nearEdgeFraction(int level, double threshold_px);
+
+  /// Distance truncation of every level, pixels.
+  float truncationPx() const;
+
   /// Per-stage device times of the last processLiveImage / residuals / accumulate call.
   const std::vector<GpuStageTiming>& lastTimings() const;
 
@@ -84,6 +101,30 @@ class GpuEdgeStages {
  private:
   explicit GpuEdgeStages(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
+};
+
+/// EdgeAlignmentBackend over GpuEdgeStages: the live frame's distance fields stay on the
+/// device and trackFrame's residuals and normal equations are computed there. Holds a
+/// reference to `stages`, which must outlive it and hold a processed live image
+/// (processLiveImage) while trackFrame runs. setPoints uploads the list (replacing the stages'
+/// reference points), except when `resident` is the reference last given to
+/// stages.setLevelPoints and the list is one of its level lists (same storage): those are on the
+/// device already and used per level as they are.
+class GpuEdgeAlignment final : public EdgeAlignmentBackend {
+ public:
+  explicit GpuEdgeAlignment(GpuEdgeStages& stages, const EdgeReference* resident = nullptr)
+      : stages_(&stages), resident_(resident) {}
+  int levelCount() const override;
+  PinholeCamera levelCamera(int level) const override;
+  float truncationPx(int level) const override;
+  Status setPoints(const std::vector<EdgePoint>& points) override;
+  Result<std::vector<float>> residuals(int level, const Pose& T_camera_ref) override;
+  Result<EdgeNormalEquations> accumulate(int level, const Pose& T_camera_ref, double sigma_px, double nu) override;
+  Result<double> nearEdgeFraction(int level, double threshold_px) override;
+
+ private:
+  GpuEdgeStages* stages_;
+  const EdgeReference* resident_;
 };
 
 }  // namespace vkloc

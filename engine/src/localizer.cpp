@@ -1,0 +1,392 @@
+// Frame-to-model localization: reference rendering policy, backends, motion model (see
+// localizer.hpp).
+#include "vkloc/localizer.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "vkloc/gpu.hpp"
+#include "vkloc/gpu_edges.hpp"
+
+namespace vkloc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+double rotationDeg(const Eigen::Matrix3d& R) { return logSO3(R).norm() * 180.0 / M_PI; }
+
+bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
+
+/// Median of the positive depths of a render (metres); 0 when nothing is seen.
+double medianDepth(const ImageF32& depth) {
+  std::vector<float> values;
+  values.reserve(depth.data.size() / 4 + 1);
+  for (size_t i = 0; i < depth.data.size(); i += 4) {
+    if (depth.data[i] > 0.0f) values.push_back(depth.data[i]);
+  }
+  if (values.empty()) return 0.0;
+  auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
+Status validateOptions(const LocalizerOptions& o) {
+  const RerenderThresholds& r = o.rerender;
+  if (!finiteIn(r.max_translation_depth_ratio, 0.0, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.max_translation_depth_ratio must be >= 0");
+  }
+  if (!finiteIn(r.max_rotation_deg, 0.0, 360.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.max_rotation_deg must be in 0..360");
+  }
+  if (!finiteIn(r.min_inlier_ratio, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.min_inlier_ratio must be in 0..1");
+  }
+  if (o.init_refinements < 0 || o.init_refinements > 100) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: init_refinements must be in 0..100");
+  }
+  if (r.max_frames < 1) return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.max_frames must be >= 1");
+  VKLOC_TRY_STATUS(validateRenderSettings(o.render));
+  VKLOC_TRY_STATUS(validateReferenceEdgeOptions(o.reference));
+  VKLOC_TRY_STATUS(validateEdgeTrackerOptions(o.tracker));
+  VKLOC_TRY_STATUS(validateEdgeDetectorOptions(o.live.detector));
+  if (o.live.levels < 1 || o.live.levels > 8) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: live.levels must be in 1..8");
+  }
+  if (!finiteIn(o.live.truncation_px, 1e-3, 16384.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: live.truncation_px must be in (0, 16384]");
+  }
+  return Status::success();
+}
+
+}  // namespace
+
+Result<LocalizerBackend> parseLocalizerBackend(const std::string& name) {
+  if (name == "auto") return LocalizerBackend::kAuto;
+  if (name == "vulkan") return LocalizerBackend::kVulkan;
+  if (name == "cpu") return LocalizerBackend::kCpu;
+  return makeError(ErrorCode::kInvalidArgument, fmt::format("backend '{}': expected auto, vulkan or cpu", name));
+}
+
+Result<RerenderPolicy> parseRerenderPolicy(const std::string& name) {
+  if (name == "every-frame") return RerenderPolicy::kEveryFrame;
+  if (name == "when-needed") return RerenderPolicy::kWhenNeeded;
+  return makeError(ErrorCode::kInvalidArgument,
+                   fmt::format("re-render policy '{}': expected every-frame or when-needed", name));
+}
+
+const char* localizerBackendName(LocalizerBackend backend) {
+  switch (backend) {
+    case LocalizerBackend::kAuto:
+      return "auto";
+    case LocalizerBackend::kVulkan:
+      return "vulkan";
+    case LocalizerBackend::kCpu:
+      return "cpu";
+  }
+  return "?";
+}
+
+const char* rerenderPolicyName(RerenderPolicy policy) {
+  return policy == RerenderPolicy::kEveryFrame ? "every-frame" : "when-needed";
+}
+
+struct Localizer::Impl {
+  LocalizerOptions options;
+  PinholeCamera camera;
+  std::shared_ptr<GpuContext> context;
+  Model model;  // kept only for the CPU reference renderer
+  std::unique_ptr<GpuRenderer> renderer;
+  std::unique_ptr<GpuEdgeStages> gpu_stages;
+  bool live_on_gpu = false;
+  bool calibration_pending = false;
+  std::string renderer_name;
+  std::string backend_reason;
+
+  // Reference view.
+  std::optional<EdgeReference> reference;
+  double reference_depth_m = 0;  // median scene depth of the reference render
+  int frames_on_reference = 0;
+
+  // Motion state.
+  std::optional<Pose> last_pose;  // last tracked (or reset) pose
+  std::optional<Pose> prev_pose;  // the tracked pose before it
+  int64_t last_pose_t_ns = 0;
+  int64_t prev_pose_t_ns = 0;
+  std::optional<int64_t> last_t_ns;  // last frame given to localize
+  double last_inlier_ratio = 1.0;
+  bool last_lost = false;
+  bool gpu_frame_ready = false;
+  bool tracked_since_reset =
+      false;  // a frame was tracked since create/reset  // the current image is already processed on the device
+
+  Result<RenderOutput> render(const Pose& T_world_camera) {
+    RenderSettings settings = options.render;
+    settings.outputs = kRenderAll;
+    if (renderer) return renderer->render(camera, T_world_camera, settings);
+    return renderReference(model, camera, T_world_camera, settings);
+  }
+
+  /// Renders and extracts a new reference at T_world_camera.
+  Status makeReference(const Pose& T_world_camera, LocalizationResult& out) {
+    auto t0 = Clock::now();
+    Result<RenderOutput> view = render(T_world_camera);
+    if (!view.ok()) return view.error();
+    out.render_ms += msSince(t0);
+    t0 = Clock::now();
+    Result<EdgeReference> ref = buildEdgeReference(*view, camera, T_world_camera, options.reference);
+    if (!ref.ok()) return ref.error();
+    out.reference_ms += msSince(t0);
+    reference = std::move(*ref);
+    if (gpu_stages) VKLOC_TRY_STATUS(gpu_stages->setLevelPoints(*reference));
+    reference_depth_m = medianDepth(view->depth);
+    frames_on_reference = 0;
+    out.reference_rendered = true;
+    return Status::success();
+  }
+
+  bool needsReference(const Pose& guess) const {
+    if (!reference || reference->points.size() < 6) return true;
+    if (options.policy == RerenderPolicy::kEveryFrame) return true;
+    if (last_lost) return true;
+    const RerenderThresholds& r = options.rerender;
+    if (frames_on_reference >= r.max_frames) return true;
+    if (last_inlier_ratio < r.min_inlier_ratio) return true;
+    const Pose T_ref_camera = reference->T_world_ref.inverse() * guess;
+    const double depth = reference_depth_m > 0 ? reference_depth_m : 1.0;
+    if (T_ref_camera.translation().norm() > r.max_translation_depth_ratio * depth) return true;
+    return rotationDeg(T_ref_camera.linear()) > r.max_rotation_deg;
+  }
+
+  Pose predict(int64_t t_ns) const {
+    if (options.motion == MotionModel::kLastPose || !prev_pose || last_pose_t_ns <= prev_pose_t_ns) return *last_pose;
+    // Constant velocity: the last inter-frame motion (body frame) scaled to the time step.
+    const Vector6d xi = logSE3(prev_pose->inverse() * *last_pose);
+    const double scale =
+        static_cast<double>(t_ns - last_pose_t_ns) / static_cast<double>(last_pose_t_ns - prev_pose_t_ns);
+    if (!std::isfinite(scale) || scale <= 0 || scale > 10) return *last_pose;
+    return *last_pose * expSE3(scale * xi);
+  }
+
+  /// Live stages + alignment on the chosen backend.
+  Result<TrackResult> align(const ImageU8& gray, const Pose& guess, bool gpu, LocalizationResult& out,
+                            std::optional<LiveFrame>& cpu_live) {
+    if (reference->points.size() < 6) {
+      // Nothing of the model is seen from the guess: a lost frame, not an error.
+      TrackResult lost;
+      lost.T_world_camera = guess;
+      lost.T_camera_ref = guess.inverse() * reference->T_world_ref;
+      return lost;
+    }
+    if (gpu) {
+      auto t0 = Clock::now();
+      if (!gpu_frame_ready) {
+        VKLOC_TRY_STATUS(gpu_stages->processLiveImage(gray));
+        gpu_frame_ready = true;
+        out.live_ms += msSince(t0);
+      }
+      t0 = Clock::now();
+      GpuEdgeAlignment backend(*gpu_stages, &*reference);
+      Result<TrackResult> r = trackFrame(*reference, backend, guess, options.tracker);
+      out.align_ms += msSince(t0);
+      return r;
+    }
+    auto t0 = Clock::now();
+    if (!cpu_live) {
+      LiveFrameOptions live = options.live;
+      live.keep_intermediate = false;
+      Result<LiveFrame> frame = buildLiveFrame(gray, camera, live);
+      if (!frame.ok()) return frame.error();
+      cpu_live = std::move(*frame);
+      out.live_ms += msSince(t0);
+    }
+    t0 = Clock::now();
+    Result<TrackResult> r = trackFrame(*reference, *cpu_live, guess, options.tracker);
+    out.align_ms += msSince(t0);
+    return r;
+  }
+
+  /// First-frame calibration of kAuto with calibrate_backend: run both and keep the faster.
+  Status calibrate(const ImageU8& gray, const Pose& guess) {
+    calibration_pending = false;
+    double best[2] = {0, 0};
+    for (int gpu = 0; gpu < 2; ++gpu) {
+      // Twice each: the first run includes shader compilation / allocation.
+      for (int run = 0; run < 2; ++run) {
+        LocalizationResult scratch;
+        std::optional<LiveFrame> live;
+        gpu_frame_ready = false;
+        Result<TrackResult> r = align(gray, guess, gpu == 1, scratch, live);
+        if (!r.ok()) return r.error();
+        best[gpu] = scratch.live_ms + scratch.align_ms;
+      }
+    }
+    live_on_gpu = best[1] < best[0];
+    backend_reason = fmt::format("calibrated on the first frame: CPU {:.1f} ms, Vulkan {:.1f} ms", best[0], best[1]);
+    return Status::success();
+  }
+};
+
+Localizer::Localizer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Localizer::~Localizer() = default;
+
+Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const PinholeCamera& camera,
+                                                     const LocalizerOptions& options,
+                                                     std::shared_ptr<GpuContext> context) {
+  VKLOC_TRY_STATUS(validateCamera(camera));
+  VKLOC_TRY_STATUS(validateOptions(options));
+  VKLOC_TRY_STATUS(validateModel(model));
+  auto impl = std::make_unique<Impl>();
+  impl->options = options;
+  impl->options.reference.levels = options.live.levels;
+  impl->camera = camera;
+  impl->context = context;
+  if (context) {
+    Result<std::unique_ptr<GpuRenderer>> renderer = GpuRenderer::create(context, model);
+    if (!renderer.ok()) return renderer.error();
+    impl->renderer = std::move(*renderer);
+    impl->renderer_name = fmt::format("render on {} ({})", context->device().name, context->device().type);
+  } else {
+    impl->model = model;
+    impl->renderer_name = "render on the CPU reference rasterizer (no Vulkan device)";
+  }
+  switch (options.backend) {
+    case LocalizerBackend::kCpu:
+      impl->backend_reason = "asked for";
+      break;
+    case LocalizerBackend::kVulkan:
+      if (!context) {
+        return makeError(ErrorCode::kNoDevice, "Localizer: backend vulkan needs a Vulkan device (none given)");
+      }
+      impl->live_on_gpu = true;
+      impl->backend_reason = "asked for";
+      break;
+    case LocalizerBackend::kAuto:
+      if (!context) {
+        impl->backend_reason = "no Vulkan device";
+      } else if (options.calibrate_backend) {
+        impl->calibration_pending = true;
+        impl->backend_reason = "to be calibrated on the first frame";
+      } else if (context->device().type == "cpu") {
+        impl->backend_reason = "the Vulkan device is a CPU driver, where OpenCV is several times faster";
+      } else {
+        impl->live_on_gpu = true;
+        impl->backend_reason = fmt::format("the Vulkan device is a {} GPU", context->device().type);
+      }
+      break;
+  }
+  if (context && (impl->live_on_gpu || impl->calibration_pending)) {
+    LiveFrameOptions live = impl->options.live;
+    live.keep_intermediate = false;
+    Result<std::unique_ptr<GpuEdgeStages>> stages = GpuEdgeStages::create(context, camera, live);
+    if (!stages.ok()) return stages.error();
+    impl->gpu_stages = std::move(*stages);
+  }
+  return std::unique_ptr<Localizer>(new Localizer(std::move(impl)));
+}
+
+void Localizer::reset(const Pose& T_world_camera) {
+  Impl& m = *impl_;
+  m.reference.reset();
+  m.prev_pose.reset();
+  m.last_pose.reset();
+  m.last_t_ns.reset();
+  m.last_inlier_ratio = 1.0;
+  m.last_lost = false;
+  m.tracked_since_reset = false;
+  if (isValidPose(T_world_camera)) m.last_pose = T_world_camera;
+}
+
+std::string Localizer::backendSummary() const {
+  const Impl& m = *impl_;
+  const char* where = m.calibration_pending ? "auto (not yet calibrated)" : (m.live_on_gpu ? "Vulkan" : "CPU");
+  std::string policy = rerenderPolicyName(m.options.policy);
+  if (m.options.policy == RerenderPolicy::kWhenNeeded) {
+    const RerenderThresholds& r = m.options.rerender;
+    policy += fmt::format(" (moved > {:g} x depth or > {:g} deg, inliers < {:g}, or {} frames)",
+                          r.max_translation_depth_ratio, r.max_rotation_deg, r.min_inlier_ratio, r.max_frames);
+  }
+  return fmt::format("{}; live edges + alignment on {} ({}); re-render {}", m.renderer_name, where, m.backend_reason,
+                     policy);
+}
+
+Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray,
+                                               const std::optional<Pose>& T_world_camera_guess) {
+  const auto t_start = Clock::now();
+  Impl& m = *impl_;
+  if (gray.channels != 1 || gray.width != m.camera.width || gray.height != m.camera.height ||
+      gray.data.size() != static_cast<size_t>(gray.width) * gray.height) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("Localizer: image is {}x{} with {} channel(s); the camera needs {}x{} gray",
+                                 gray.width, gray.height, gray.channels, m.camera.width, m.camera.height));
+  }
+  if (m.last_t_ns && t_ns <= *m.last_t_ns) {
+    return makeError(
+        ErrorCode::kInvalidArgument,
+        fmt::format("Localizer: frame time {} ns is not after the previous frame's {} ns", t_ns, *m.last_t_ns));
+  }
+  if (T_world_camera_guess && !isValidPose(*T_world_camera_guess)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: the pose guess is not a finite rigid transform");
+  }
+  if (!T_world_camera_guess && !m.last_pose) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: no pose guess and no previous pose; call reset() first");
+  }
+  const Pose guess = T_world_camera_guess ? *T_world_camera_guess : m.predict(t_ns);
+
+  LocalizationResult out;
+  out.t_ns = t_ns;
+  out.T_world_camera = guess;
+  if (m.needsReference(guess)) VKLOC_TRY_STATUS(m.makeReference(guess, out));
+  if (m.calibration_pending) VKLOC_TRY_STATUS(m.calibrate(gray, guess));
+
+  std::optional<LiveFrame> cpu_live;
+  m.gpu_frame_ready = false;
+  Result<TrackResult> track = m.align(gray, guess, m.live_on_gpu, out, cpu_live);
+  if (!track.ok()) return track.error();
+  if (track->state == TrackingState::kLost && !out.reference_rendered && m.options.retry_lost_with_fresh_reference) {
+    VKLOC_TRY_STATUS(m.makeReference(guess, out));
+    Result<TrackResult> retry = m.align(gray, guess, m.live_on_gpu, out, cpu_live);
+    if (!retry.ok()) return retry.error();
+    track = std::move(retry);
+  }
+  // Initialization (no frame tracked since reset): a guess far off converges in steps, each
+  // rendering a fresh reference at the last estimate.
+  for (int step = 0; step < m.options.init_refinements && !m.tracked_since_reset &&
+                     track->state == TrackingState::kLost && isValidPose(track->T_world_camera);
+       ++step) {
+    VKLOC_TRY_STATUS(m.makeReference(track->T_world_camera, out));
+    Result<TrackResult> again = m.align(gray, track->T_world_camera, m.live_on_gpu, out, cpu_live);
+    if (!again.ok()) return again.error();
+    track = std::move(again);
+  }
+  m.last_t_ns = t_ns;
+  ++m.frames_on_reference;
+  out.quality = track->quality;
+  out.state = track->state;
+  out.T_world_camera = track->T_world_camera;
+  out.covariance = track->covariance;
+  out.reference_points = static_cast<int>(m.reference->points.size());
+  out.scene_depth_m = m.reference_depth_m;
+  if (track->state == TrackingState::kTracking) {
+    m.prev_pose = m.last_pose;
+    m.prev_pose_t_ns = m.last_pose_t_ns;
+    m.last_pose = track->T_world_camera;
+    m.last_pose_t_ns = t_ns;
+    m.last_inlier_ratio = track->quality.inlier_ratio;
+    m.last_lost = false;
+    m.tracked_since_reset = true;
+  } else {
+    // Keep the last trusted pose; stop extrapolating a motion that was not confirmed.
+    m.prev_pose.reset();
+    if (!m.last_pose) m.last_pose = guess;
+    m.last_lost = true;
+  }
+  out.total_ms = msSince(t_start);
+  return out;
+}
+
+}  // namespace vkloc

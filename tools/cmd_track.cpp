@@ -1,0 +1,334 @@
+// vkloc track: localize every image of a sequence in its model, write the trajectory and a
+// per-frame log as they are made, then evaluate against the sequence's ground truth.
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "common.hpp"
+#include "vkloc/demo.hpp"
+#include "vkloc/eval.hpp"
+#include "vkloc/localizer.hpp"
+#include "vkloc/se3.hpp"
+#include "vkloc/sequence.hpp"
+
+namespace vkloc::cli {
+namespace {
+
+struct TrackArgs {
+  std::string sequence;
+  std::string out = "trajectory.txt";
+  std::string frames_csv;
+  std::string backend = "auto";
+  std::string policy = "when-needed";
+  std::string motion = "constant-velocity";
+  size_t max_frames = 0;
+  std::string report_dir;
+  std::string init_offset;  ///< "dx,dy,dz,rx,ry,rz": metres (world axes), degrees (camera axes).
+  bool calibrate = false;
+  bool quiet = false;
+  DeviceArgs device;
+  bool no_vulkan = false;
+};
+
+/// A file written line by line and flushed after each, so that an interrupted run keeps
+/// everything written before.
+class LineWriter {
+ public:
+  explicit LineWriter(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "w")) {
+    if (!file_) throw Failure{fmt::format("{}: cannot open for writing", path)};
+  }
+  ~LineWriter() {
+    if (file_) std::fclose(file_);
+  }
+  LineWriter(const LineWriter&) = delete;
+  LineWriter& operator=(const LineWriter&) = delete;
+  void line(const std::string& text) {
+    if (std::fputs(text.c_str(), file_) < 0 || std::fputc('\n', file_) == EOF || std::fflush(file_) != 0) {
+      throw Failure{fmt::format("{}: write failed", path_)};
+    }
+  }
+
+ private:
+  std::string path_;
+  std::FILE* file_;
+};
+
+std::string seconds(int64_t t_ns) {
+  const char* sign = t_ns < 0 ? "-" : "";
+  const uint64_t a = t_ns < 0 ? static_cast<uint64_t>(-(t_ns + 1)) + 1 : static_cast<uint64_t>(t_ns);
+  return fmt::format("{}{}.{:09d}", sign, a / 1000000000ull, a % 1000000000ull);
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const size_t n = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n), v.end());
+  return v[n];
+}
+
+Model loadSequenceModel(const Sequence& seq) {
+  const std::string path = seq.modelPath();
+  if (path.empty()) throw Failure{fmt::format("{}: the sequence names no model", seq.directory)};
+  std::array<double, 16> T{};
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) T[r * 4 + c] = seq.T_world_model.matrix()(r, c);
+  }
+  if (isDemoModel(path) && !std::filesystem::exists(path)) {
+    Model m = take(makeDemoModel(path));
+    if (!seq.T_world_model.isApprox(Pose::Identity()) || seq.unit_scale != 1.0) {
+      transformModel(m, T, seq.unit_scale);
+      buildBlocks(m, 32768);
+    }
+    return m;
+  }
+  ModelLoadOptions options;
+  options.T_world_model = T;
+  options.unit_scale = seq.unit_scale;
+  std::vector<std::string> warnings;
+  Model m = take(loadModel(path, options, &warnings));
+  for (const auto& w : warnings) std::fprintf(stderr, "vkloc: warning: %s\n", w.c_str());
+  return m;
+}
+
+Pose initialPose(const Sequence& seq, const std::string& offset) {
+  Pose T;
+  if (seq.initial_T_world_camera) {
+    T = *seq.initial_T_world_camera;
+  } else if (!seq.groundtruth.empty() &&
+             std::llabs(seq.groundtruth.front().t_ns - seq.images.front().t_ns) < 10000000) {
+    T = seq.groundtruth.front().T_world_camera;
+  } else {
+    throw Failure{fmt::format("{}: no initial_T_world_camera in sequence.yaml and no ground truth at the first image",
+                              seq.directory)};
+  }
+  if (!offset.empty()) {
+    const auto v = take(parseNumbers(offset, "--init-offset (dx,dy,dz metres, rx,ry,rz degrees)", 6));
+    Pose dR = Pose::Identity();
+    dR.linear() = expSO3(Eigen::Vector3d(v[3], v[4], v[5]) * M_PI / 180.0);
+    T = T * dR;
+    T.translation() += Eigen::Vector3d(v[0], v[1], v[2]);
+  }
+  return T;
+}
+
+void run(const TrackArgs& a) {
+  const auto t_start = std::chrono::steady_clock::now();
+  const Sequence seq = take(loadSequence(a.sequence));
+  if (seq.images.empty()) throw Failure{fmt::format("{}: images.txt lists no image", a.sequence)};
+  if (seq.camera.model != "pinhole") {
+    throw Failure{fmt::format("{}/camera.yaml: camera model '{}' is not supported yet (pinhole only)", a.sequence,
+                              seq.camera.model)};
+  }
+  for (double k : seq.camera.distortion) {
+    if (k != 0.0) {
+      throw Failure{
+          fmt::format("{}/camera.yaml: lens distortion is not supported yet; undistort the images first", a.sequence)};
+    }
+  }
+  const PinholeCamera camera = seq.camera.intrinsics;
+  LocalizerOptions options;
+  options.backend = take(parseLocalizerBackend(a.backend));
+  options.policy = take(parseRerenderPolicy(a.policy));
+  options.calibrate_backend = a.calibrate;
+  if (a.motion == "last-pose") {
+    options.motion = MotionModel::kLastPose;
+  } else if (a.motion != "constant-velocity") {
+    throw Failure{fmt::format("--motion '{}': expected constant-velocity or last-pose", a.motion)};
+  }
+  const Pose T_init = initialPose(seq, a.init_offset);
+
+  const Model model = loadSequenceModel(seq);
+  std::shared_ptr<GpuContext> context;
+  if (!a.no_vulkan) context = a.device.create();
+  auto localizer = take(Localizer::create(model, camera, options, context));
+  localizer->reset(T_init);
+  const double setup_ms = msSince(t_start);
+
+  const size_t total = a.max_frames > 0 ? std::min(a.max_frames, seq.images.size()) : seq.images.size();
+  if (!a.quiet) {
+    std::printf("sequence %s: %zu of %zu images, %dx%d; model %zu triangles\n", seq.name.c_str(), total,
+                seq.images.size(), camera.width, camera.height, model.triangleCount());
+    std::printf("%s\n", localizer->backendSummary().c_str());
+    std::fflush(stdout);
+  }
+
+  const std::filesystem::path out_path(a.out);
+  if (out_path.has_parent_path()) std::filesystem::create_directories(out_path.parent_path());
+  const std::string frames_path = a.frames_csv.empty()
+                                      ? (out_path.parent_path() / (out_path.stem().string() + "_frames.csv")).string()
+                                      : a.frames_csv;
+  LineWriter traj(a.out);
+  LineWriter frames(frames_path);
+  traj.line("# vkloc track: T_world_camera, TUM format: t tx ty tz qx qy qz qw (lost frames are not listed)");
+  frames.line(
+      "t_ns,state,render_ms,reference_ms,live_ms,align_ms,total_ms,inlier_ratio,mean_residual_px,points,iterations,"
+      "rerendered,visible_ratio,spread_ratio,chance_inlier_ratio,scale_px");
+
+  const bool tty = isatty(fileno(stdout)) != 0 && !a.quiet;
+  size_t last_decile = 0;
+  std::vector<StampedPose> estimate;
+  std::vector<double> total_ms, depths;
+  size_t lost = 0, rerendered = 0, lost_after_first = 0;
+  long first_tracked = -1;
+  double first_frame_ms = 0;
+  const auto t_frames = std::chrono::steady_clock::now();
+  for (size_t i = 0; i < total; ++i) {
+    const ImageEntry& entry = seq.images[i];
+    ImageU8 gray = take(readImageU8(seq.imagePath(i), 1));
+    Result<LocalizationResult> r = localizer->localize(entry.t_ns, gray);
+    if (!r.ok()) throw Failure{fmt::format("{}: frame {}: {}", seq.imagePath(i), i, r.error().message)};
+    const LocalizationResult& f = *r;
+    const bool tracking = f.state == TrackingState::kTracking;
+    if (tracking && first_tracked < 0) first_tracked = static_cast<long>(i);
+    lost_after_first += !tracking && first_tracked >= 0;
+    if (tracking) {
+      traj.line(fmt::format("{} {}", seconds(entry.t_ns), formatPose(f.T_world_camera)));
+      estimate.push_back({entry.t_ns, f.T_world_camera});
+    } else {
+      ++lost;
+    }
+    rerendered += f.reference_rendered;
+    frames.line(
+        fmt::format("{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f}",
+                    entry.t_ns, tracking ? "tracking" : "lost", f.render_ms, f.reference_ms, f.live_ms, f.align_ms,
+                    f.total_ms, f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used,
+                    f.quality.iterations, f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio,
+                    f.quality.chance_inlier_ratio, f.quality.scale_px));
+    if (i == 0) {
+      first_frame_ms = f.total_ms;
+    } else {
+      total_ms.push_back(f.total_ms);
+    }
+    if (f.scene_depth_m > 0) depths.push_back(f.scene_depth_m);
+    if (!a.quiet) {
+      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_frames).count();
+      const double fps = s > 0 ? static_cast<double>(i + 1) / s : 0.0;
+      if (tty) {
+        std::printf("\rframe %zu/%zu  %.1f fps  lost %zu  re-rendered %zu", i + 1, total, fps, lost, rerendered);
+        if (i + 1 == total) std::printf("\n");
+        std::fflush(stdout);
+      } else {
+        const size_t decile = (i + 1) * 10 / total;
+        if (decile > last_decile) {
+          last_decile = decile;
+          std::printf("frame %zu/%zu, %.1f fps, lost %zu, re-rendered %zu\n", i + 1, total, fps, lost, rerendered);
+          std::fflush(stdout);
+        }
+      }
+    }
+  }
+  const double hz = total_ms.empty() ? 0.0 : 1000.0 / median(total_ms);
+
+  // Evaluation against ground truth.
+  std::string summary = fmt::format(
+      "{{\n  \"sequence\": \"{}\",\n  \"frames\": {},\n  \"lost\": {},\n  \"rerendered\": {},\n  \"backend\": \"{}\",\n"
+      "  \"policy\": \"{}\",\n  \"startup_ms\": {:.1f},\n  \"first_frame_ms\": {:.1f},\n  \"median_frame_ms\": "
+      "{:.3f},\n"
+      "  \"hz_median\": {:.3f},\n  \"first_tracked_frame\": {},\n  \"lost_after_first_tracked\": {},\n  "
+      "\"scene_depth_median_m\": {:.6g}",
+      seq.name, total, lost, rerendered, localizerBackendName(options.backend), a.policy, setup_ms, first_frame_ms,
+      total_ms.empty() ? 0.0 : median(total_ms), hz, first_tracked, lost_after_first, median(depths));
+  std::filesystem::path report_dir = a.report_dir.empty()
+                                         ? out_path.parent_path() / (out_path.stem().string() + "_report")
+                                         : std::filesystem::path(a.report_dir);
+  std::filesystem::create_directories(report_dir);
+  if (!seq.groundtruth.empty()) {
+    EvalInput input;
+    input.estimate = estimate;
+    input.groundtruth = seq.groundtruth;
+    std::vector<int64_t> times;
+    for (size_t i = 0; i < total; ++i) times.push_back(seq.images[i].t_ns);
+    input.frame_times_ns = times;
+    input.frame_log = take(loadFrameLog(frames_path));
+    const EvalResult result = take(evaluateTrajectory(input));
+    ReportInfo info;
+    info.estimate_path = a.out;
+    info.sequence_path = a.sequence;
+    info.frames_path = frames_path;
+    const std::string json_path = (report_dir / "report.json").string();
+    const std::string html_path = (report_dir / "report.html").string();
+    check(writeReportFile(json_path, evalReportJson(result, info)));
+    Result<std::string> chartjs = loadChartJs(defaultChartJsPath());
+    check(writeReportFile(html_path, evalReportHtml(result, info, chartjs.ok() ? &chartjs.value() : nullptr)));
+    summary += fmt::format(
+        ",\n  \"translation_median_m\": {:.9g},\n  \"translation_mean_m\": {:.9g},\n  \"translation_max_m\": {:.9g},\n"
+        "  \"rotation_median_deg\": {:.9g},\n  \"rotation_mean_deg\": {:.9g},\n  \"rotation_max_deg\": {:.9g},\n"
+        "  \"localized_fraction\": {:.6f},\n  \"translation_median_over_depth\": {:.9g}",
+        result.translation_m.median, result.translation_m.mean, result.translation_m.max, result.rotation_deg.median,
+        result.rotation_deg.mean, result.rotation_deg.max, result.localized_fraction,
+        depths.empty() ? 0.0 : result.translation_m.median / median(depths));
+    if (!a.quiet) {
+      std::fputs(formatEvalTable(result).c_str(), stdout);
+      std::printf("report: %s\n", std::filesystem::absolute(html_path).string().c_str());
+    }
+  } else if (!a.quiet) {
+    std::printf("no ground truth in %s: nothing to evaluate\n", a.sequence.c_str());
+  }
+  summary += "\n}\n";
+  check(writeReportFile((report_dir / "track.json").string(), summary));
+  std::printf(
+      "tracked %zu frames, %zu lost, %zu references rendered: %.1f Hz (median %.1f ms per frame after the first); "
+      "start-up %.0f ms, first frame %.0f ms (includes shader compilation)\n",
+      total, lost, rerendered, hz, total_ms.empty() ? 0.0 : median(total_ms), setup_ms, first_frame_ms);
+  std::printf("wrote %s and %s\n", a.out.c_str(), frames_path.c_str());
+}
+
+void addTrackOptions(CLI::App* cmd, const std::shared_ptr<TrackArgs>& args) {
+  cmd->add_option("--sequence,-s", args->sequence, "Sequence folder (sequence.yaml, camera.yaml, images.txt)")
+      ->required();
+  cmd->add_option("--out,-o", args->out, "Estimated trajectory, TUM format (lost frames left out)")
+      ->capture_default_str();
+  cmd->add_option("--frames-csv", args->frames_csv,
+                  "Per-frame log (t_ns, state, stage *_ms, quality); default <out stem>_frames.csv");
+  cmd->add_option("--backend", args->backend, "Live edges + alignment: auto | vulkan | cpu")
+      ->check(CLI::IsMember({"auto", "vulkan", "cpu"}))
+      ->capture_default_str();
+  cmd->add_option("--policy", args->policy, "Reference re-rendering: every-frame | when-needed")
+      ->check(CLI::IsMember({"every-frame", "when-needed"}))
+      ->capture_default_str();
+  cmd->add_option("--motion", args->motion, "Pose prediction: constant-velocity | last-pose")->capture_default_str();
+  cmd->add_option("--max-frames", args->max_frames, "Track only the first N images (0 = all)")->capture_default_str();
+  cmd->add_option("--report", args->report_dir,
+                  "Report folder (report.html, report.json, track.json); default "
+                  "<out stem>_report next to --out");
+  cmd->add_option("--init-offset", args->init_offset,
+                  "Perturb the initial pose: 'dx,dy,dz,rx,ry,rz' (metres on world axes, degrees about camera axes)");
+  cmd->add_flag("--calibrate", args->calibrate, "With --backend auto: time CPU and Vulkan on the first frame");
+  cmd->add_flag("--no-vulkan", args->no_vulkan, "Render with the CPU reference rasterizer (slow)");
+  cmd->add_flag("--quiet,-q", args->quiet, "Print only the final line");
+  args->device.add(*cmd);
+}
+
+}  // namespace
+
+static void addTrackVerb(CLI::App& app) {
+  auto args = std::make_shared<TrackArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "track", "Localize every image of a sequence in its model; write the trajectory, a frames log and a report");
+  addTrackOptions(cmd, args);
+  cmd->callback([args] { run(*args); });
+}
+
+/// Runs `vkloc track` with the given arguments (without the verb), as other verbs' building
+/// block (vkloc demo). Throws Failure like the verb.
+void runTrackArguments(const std::vector<std::string>& arguments) {
+  CLI::App app{"vkloc track"};
+  auto args = std::make_shared<TrackArgs>();
+  addTrackOptions(&app, args);
+  std::vector<std::string> reversed(arguments.rbegin(), arguments.rend());
+  try {
+    app.parse(reversed);
+  } catch (const CLI::ParseError& e) {
+    throw Failure{fmt::format("track: {}", e.what())};
+  }
+  run(*args);
+}
+
+VKLOC_REGISTER_VERB(30, addTrackVerb);
+
+}  // namespace vkloc::cli
