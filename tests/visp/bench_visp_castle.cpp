@@ -4,6 +4,10 @@
 //
 //   vkloc_visp_bench [--castle DIR] [--out DIR] [--mode edge|edge+klt|klt] [--runs N]
 //                    [--frames N] [--init-offset dx,dy,dz,rx,ry,rz]
+//                    [--vkloc auto,cpu,vulkan] [--vkloc-policy when-needed|every-frame]
+//
+// With --vkloc, vkloc's Localizer runs on the same in-memory frames in the same process after
+// ViSP (same start pose), so the time ratio is measured in one run on one machine state.
 //
 // What it does, per mode:
 // - Loads every Images/Image_NNNN.pgm (or .png; 640x480 gray) into memory with its ground truth
@@ -81,6 +85,8 @@
 #include <vector>
 
 #include "vkloc/eval.hpp"
+#include "vkloc/gpu.hpp"
+#include "vkloc/localizer.hpp"
 #include "vkloc/pose.hpp"
 #include "vkloc/sequence.hpp"
 #include "vkloc/status.hpp"
@@ -104,6 +110,10 @@ struct BenchOptions {
   double lost_deg = 5.0;      ///< Rotation error above which a frame is lost, degrees.
   double max_mean_mm = 0.0;   ///< Fail when the mean translation error exceeds this, mm (0 = off).
   double max_mean_deg = 0.0;  ///< Fail when the mean rotation error exceeds this, deg (0 = off).
+  /// vkloc backends run on the same frames in the same process after ViSP ("auto,cpu,vulkan";
+  /// empty = ViSP only).
+  std::string vkloc_backends;
+  std::string vkloc_policy = "when-needed";  ///< Re-render policy of vkloc: when-needed | every-frame.
 };
 
 /// One image of the sequence with its ground truth.
@@ -345,6 +355,130 @@ vkloc::Status writeOutputs(const BenchOptions& options, const std::vector<Frame>
   return vkloc::Status{};
 }
 
+/// One vkloc backend over the same frames: per-frame stage times of every timed pass, poses of
+/// the first timed pass.
+struct VklocRun {
+  std::string backend;            ///< "auto", "cpu" or "vulkan".
+  std::string summary;            ///< Localizer::backendSummary().
+  double create_ms = 0;           ///< Localizer::create (renderer upload, pipelines), ms.
+  double first_frame_ms = 0;      ///< First localize() of the warm-up pass (shader JIT), ms.
+  std::vector<double> total_ms;   ///< localize() wall time, every frame of every timed pass.
+  std::vector<double> reused_ms;  ///< live + align of frames that kept the reference, ms.
+  std::vector<double> render_ms, reference_ms, live_ms, align_ms;  ///< Stage times, ms.
+  std::vector<double> t_err_mm, r_err_deg;                         ///< Errors of the first timed pass.
+  size_t lost = 0;                                                 ///< Frames flagged lost in the first timed pass.
+  size_t rerendered = 0;                                           ///< References rendered in the first timed pass.
+};
+
+vkloc::Result<VklocRun> runVkloc(const std::vector<Frame>& frames, const BenchOptions& options,
+                                 const std::string& backend, const Pose& T_world_camera_init,
+                                 const std::shared_ptr<vkloc::GpuContext>& context) {
+  using namespace vkloc;
+  const fs::path models = fs::path(options.castle_dir) / "Models";
+  auto castle = parseCaoFile((models / "chateau.cao").string());
+  if (!castle) return castle.error();
+  auto cube = parseCaoFile((models / "cube.cao").string());
+  if (!cube) return cube.error();
+  appendCaoModel(*castle, *cube, fromVisp(castleCubePose()));
+  auto model = caoToModel(*castle, (models / "chateau.cao").string());
+  if (!model) return model.error();
+  PinholeCamera camera;
+  camera.fx = camera.fy = 700.0;
+  camera.cx = 320.0;
+  camera.cy = 240.0;
+  camera.width = static_cast<int>(frames.front().image.getWidth());
+  camera.height = static_cast<int>(frames.front().image.getHeight());
+
+  LocalizerOptions lo;
+  auto parsed_backend = parseLocalizerBackend(backend);
+  if (!parsed_backend) return parsed_backend.error();
+  lo.backend = *parsed_backend;
+  auto policy = parseRerenderPolicy(options.vkloc_policy);
+  if (!policy) return policy.error();
+  lo.policy = *policy;
+
+  VklocRun out;
+  out.backend = backend;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto localizer = Localizer::create(*model, camera, lo, context);
+  if (!localizer) return localizer.error();
+  out.create_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  out.summary = (*localizer)->backendSummary();
+
+  std::vector<ImageU8> images;
+  for (const Frame& f : frames) {
+    ImageU8 g(static_cast<int>(f.image.getWidth()), static_cast<int>(f.image.getHeight()), 1);
+    std::copy(f.image.bitmap, f.image.bitmap + g.data.size(), g.data.begin());
+    images.push_back(std::move(g));
+  }
+  const int passes = std::max(options.runs, 1);
+  for (int pass = -1; pass < passes; ++pass) {  // pass -1: warm-up.
+    (*localizer)->reset(T_world_camera_init);
+    for (size_t i = 0; i < frames.size(); ++i) {
+      auto r = (*localizer)->localize(frames[i].t_ns, images[i]);
+      if (!r) return r.error();
+      if (pass < 0) {
+        if (i == 0) out.first_frame_ms = r->total_ms;
+        continue;
+      }
+      out.total_ms.push_back(r->total_ms);
+      out.render_ms.push_back(r->render_ms);
+      out.reference_ms.push_back(r->reference_ms);
+      out.live_ms.push_back(r->live_ms);
+      out.align_ms.push_back(r->align_ms);
+      if (!r->reference_rendered) out.reused_ms.push_back(r->live_ms + r->align_ms);
+      if (pass == 0) {
+        const Pose T_wc_gt = frames[i].T_camera_object_gt.inverse();
+        out.t_err_mm.push_back((r->T_world_camera.translation() - T_wc_gt.translation()).norm() * 1e3);
+        out.r_err_deg.push_back(rotationAngleDeg(r->T_world_camera.linear().transpose() * T_wc_gt.linear()));
+        out.lost += r->state == TrackingState::kLost ? 1 : 0;
+        out.rerendered += r->reference_rendered ? 1 : 0;
+      }
+    }
+  }
+  return out;
+}
+
+/// Runs the requested vkloc backends and prints them beside ViSP's median track() time.
+int compareWithVkloc(const std::vector<Frame>& frames, const BenchOptions& options, const Pose& T_camera_object_init,
+                     double visp_median_ms, double visp_mean_mm, double visp_mean_deg) {
+  std::vector<std::string> backends;
+  std::stringstream list(options.vkloc_backends);
+  for (std::string b; std::getline(list, b, ',');) {
+    if (!b.empty()) backends.push_back(b);
+  }
+  auto context = vkloc::GpuContext::create();
+  std::shared_ptr<vkloc::GpuContext> device = context ? *context : nullptr;
+  if (!context) std::printf("vkloc: no Vulkan device (%s): CPU only\n", context.error().message.c_str());
+  std::printf("\nvkloc on the same %zu frames (policy %s), %d timed passes after 1 warm-up pass:\n", frames.size(),
+              options.vkloc_policy.c_str(), std::max(options.runs, 1));
+  std::printf("%-8s %9s %9s %9s %9s %9s %10s %9s %9s %9s %5s %6s\n", "backend", "frame ms", "render", "refpts", "live",
+              "align", "reused ms", "x ViSP", "mean mm", "mean deg", "lost", "rerend");
+  int rc = 0;
+  for (const std::string& b : backends) {
+    auto run = runVkloc(frames, options, b, T_camera_object_init.inverse(), device);
+    if (!run) {
+      std::fprintf(stderr, "vkloc_visp_bench: vkloc backend %s: %s\n", b.c_str(), run.error().message.c_str());
+      rc = 1;
+      continue;
+    }
+    const VklocRun& v = *run;
+    const double median = percentile(v.total_ms, 0.5);
+    const double reused = v.reused_ms.empty() ? NAN : percentile(v.reused_ms, 0.5);
+    std::printf("%-8s %9.3f %9.3f %9.3f %9.3f %9.3f %10.3f %9.2f %9.3f %9.4f %5zu %6zu\n", b.c_str(), median,
+                percentile(v.render_ms, 0.5), percentile(v.reference_ms, 0.5), percentile(v.live_ms, 0.5),
+                percentile(v.align_ms, 0.5), reused, median / visp_median_ms, vkloc::computeErrorStats(v.t_err_mm).mean,
+                vkloc::computeErrorStats(v.r_err_deg).mean, v.lost, v.rerendered);
+    std::printf("         %s; create %.0f ms, first frame %.0f ms (shader JIT on lavapipe)\n", v.summary.c_str(),
+                v.create_ms, v.first_frame_ms);
+  }
+  std::printf(
+      "ViSP (%s): %.3f ms median per frame, %.2f mm / %.3f deg mean; 'x ViSP' = vkloc median / ViSP median;"
+      " 'reused ms' = live + align of frames that kept the reference (median)\n",
+      options.mode.c_str(), visp_median_ms, visp_mean_mm, visp_mean_deg);
+  return rc;
+}
+
 int run(const BenchOptions& options) {
   if (options.mode != "edge" && options.mode != "edge+klt" && options.mode != "klt") {
     std::fprintf(stderr, "vkloc_visp_bench: --mode must be edge, edge+klt or klt, not '%s'\n", options.mode.c_str());
@@ -464,6 +598,12 @@ int run(const BenchOptions& options) {
   if (!pass.first_exception.empty()) std::printf("first exception: %s\n", pass.first_exception.c_str());
   std::printf("sequence: %s\n", tracked.back() ? "tracked to the end" : "LOST");
 
+  if (!options.vkloc_backends.empty()) {
+    if (compareWithVkloc(frames, options, T_camera_object_init, percentile(all_ms, 0.5), t_stats.mean, r_stats.mean) !=
+        0) {
+      return 1;
+    }
+  }
   if (!options.out_dir.empty()) {
     if (auto status = writeOutputs(options, frames, pass, median_ms, t_err_mm, r_err_deg, tracked); !status) {
       std::fprintf(stderr, "vkloc_visp_bench: %s\n", status.error().message.c_str());
@@ -504,6 +644,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-mean-mm", options.max_mean_mm, "Exit 1 when the mean translation error exceeds this, mm");
   app.add_option("--max-mean-deg", options.max_mean_deg, "Exit 1 when the mean rotation error exceeds this, deg");
+  app.add_option("--vkloc", options.vkloc_backends,
+                 "Also run vkloc on the same frames in this process with these backends, e.g. auto,cpu,vulkan");
+  app.add_option("--vkloc-policy", options.vkloc_policy, "vkloc re-render policy: when-needed or every-frame")
+      ->capture_default_str();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
