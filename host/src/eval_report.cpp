@@ -251,7 +251,7 @@ function overTime(id,label,values,aligned,alignedLabel,unit,color){
   chart(id,{type:'scatter',data:{datasets:sets},options:opts('time (s)',unit)});}
 overTime('terr','translation error',D.terr,D.aligned_terr,'after SE(3) alignment','error (m)','#1f77b4');
 overTime('rerr','rotation error',D.rerr,D.aligned_rerr,'after SE(3) alignment','error (deg)','#9467bd');
-function hist(id,h,label,unit,color){chart(id,{type:'bar',data:{labels:h.centres,
+function hist(id,h,label,unit,color){chart(id,{type:'bar',data:{labels:h.centres.map(c=>+c.toPrecision(3)),
   datasets:[{label:label,data:h.counts,backgroundColor:color,barPercentage:1,categoryPercentage:1}]},
   options:Object.assign({},base,{scales:{x:{title:{display:true,text:unit}},y:{title:{display:true,text:'frames'}}}})});}
 hist('thist',D.thist,'translation error','error (m), bin centre','#d62728');
