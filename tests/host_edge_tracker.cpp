@@ -453,7 +453,8 @@ TEST(EdgeTrackerBackend, SeamGivesTheLiveFrameResultAndPropagatesErrors) {
   auto live = buildLiveFrame(render(model, cam, T_gt).gray, cam);
   ASSERT_TRUE(reference.ok() && live.ok());
   EdgeTrackerOptions options;
-  options.coarsest_level = -1;  // all 3 levels
+  options.coarsest_level = -1;             // all 3 levels
+  options.far_first_depth_quantile = 0.0;  // one hypothesis: one upload per level
   auto direct = trackFrame(*reference, *live, T_ref, options);
   RecordingBackend backend(*live);
   auto seam = trackFrame(*reference, backend, T_ref, options);
@@ -513,6 +514,12 @@ TEST(EdgeTracker, RejectsBadInput) {
   LiveFrame broken = live;
   broken.levels[0].field.gradient = ImageF32(3, 3, 2);
   EXPECT_FALSE(trackFrame(ref, broken, Pose::Identity()).ok());
+  EdgeTrackerOptions far;
+  far.far_first_depth_quantile = 1.5;
+  EXPECT_FALSE(validateEdgeTrackerOptions(far).ok());
+  far.far_first_depth_quantile = 0.3;
+  far.far_first_coarsest_level = -2;
+  EXPECT_FALSE(validateEdgeTrackerOptions(far).ok());
 }
 
 }  // namespace

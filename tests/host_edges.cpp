@@ -330,8 +330,8 @@ TEST(ReferenceEdges, BoxSilhouetteAndCreasePointsLieOnTheBoxEdges) {
     // The boundary lies anywhere between the two pixel centres (+-0.5 px in the image), and a
     // pixel on a face seen at an angle covers more than one footprint on it.
     EXPECT_LT(err, 1.5 * footprint) << "kind " << p.kind << " error " << err << " m";
-    occlusion += p.kind == kEdgeOcclusion;
-    crease += p.kind == kEdgeCrease;
+    occlusion += (p.kind & ~kEdgeBackground) == kEdgeOcclusion;
+    crease += (p.kind & ~kEdgeBackground) == kEdgeCrease;
   }
   EXPECT_GT(occlusion, 400);
   EXPECT_GT(crease, 150);
@@ -353,7 +353,7 @@ TEST(ReferenceEdges, BoxSilhouetteAndCreasePointsLieOnTheBoxEdges) {
   for (const EdgePoint& p : backProjectEdges(*flags2, view->depth, cam, with_texture)) {
     const Eigen::Vector3d pc(p.x, p.y, p.z);
     EXPECT_LT(imageDistanceToBoxEdges(pc, lo, hi, cam, T_world_ref), 1.25);
-    texture_points += p.kind == kEdgeTexture;
+    texture_points += (p.kind & ~kEdgeBackground) == kEdgeTexture;
   }
   EXPECT_GT(texture_points, 400);
 }
@@ -406,6 +406,52 @@ TEST(ReferenceEdges, SubsampleRespectsBudgetAndCellsDeterministically) {
   // A tiny budget is still honoured.
   options.max_points = 50;
   EXPECT_EQ(subsampleEdgePoints(points, cam, options).size(), 50u);
+}
+
+TEST(ReferenceEdges, HoleRimsAreDroppedAndSilhouettesKept) {
+  // A 1 m square wall in the plane z = 0 with an 8 cm square hole in its centre, seen head-on
+  // from 1.5 m (200 px per metre): the hole is 16 px wide, the wall's outline 200 px.
+  Model wall;
+  wall.source = "wall with a hole";
+  const double a = 0.5, b = 0.04;
+  const Eigen::Vector3d ex = Eigen::Vector3d::UnitX(), ey = Eigen::Vector3d::UnitY();
+  test::appendQuad(wall, {-a, -a, 0}, (2 * a) * ex, (a - b) * ey);  // below the hole
+  test::appendQuad(wall, {-a, b, 0}, (2 * a) * ex, (a - b) * ey);   // above
+  test::appendQuad(wall, {-a, -b, 0}, (a - b) * ex, (2 * b) * ey);  // left
+  test::appendQuad(wall, {b, -b, 0}, (a - b) * ex, (2 * b) * ey);   // right
+  test::finishSingleBlock(wall);
+  PinholeCamera cam;
+  cam.width = 320;
+  cam.height = 240;
+  cam.fx = cam.fy = 300;
+  cam.cx = 159.5;
+  cam.cy = 119.5;
+  const Pose T_world_ref = test::cameraLookingAt({0.0, 0.0, 1.5}, {0.0, 0.0, 0.0});
+  auto view = renderReference(wall, cam, T_world_ref);
+  ASSERT_TRUE(view.ok()) << view.error().message;
+  auto count = [&](int hole_gap_px, int& rim, int& outline) {
+    ReferenceEdgeOptions options;
+    options.texture_edges = false;
+    options.hole_gap_px = hole_gap_px;
+    auto flags = detectReferenceEdges(*view, options);
+    ASSERT_TRUE(flags.ok());
+    rim = outline = 0;
+    for (const EdgePoint& p : backProjectEdges(*flags, view->depth, cam, options)) {
+      if ((p.kind & ~kEdgeBackground) != kEdgeOcclusion) continue;
+      EXPECT_TRUE(p.kind & kEdgeBackground);  // every depth jump here is against background
+      const Eigen::Vector3d w = T_world_ref * Eigen::Vector3d(p.x, p.y, p.z);
+      const double r = std::max(std::abs(w.x()), std::abs(w.y()));
+      rim += r < 0.1;
+      outline += r > 0.4;
+    }
+  };
+  int rim = 0, outline = 0;
+  count(0, rim, outline);
+  EXPECT_GT(rim, 40);  // 4 x 16 px of hole rim
+  EXPECT_GT(outline, 600);
+  count(24, rim, outline);
+  EXPECT_EQ(rim, 0);
+  EXPECT_GT(outline, 600);  // the wall's outline does not resume: kept
 }
 
 }  // namespace

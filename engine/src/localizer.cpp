@@ -5,8 +5,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "vkloc/gpu.hpp"
 #include "vkloc/gpu_edges.hpp"
@@ -45,6 +47,12 @@ Status validateOptions(const LocalizerOptions& o) {
   }
   if (!finiteIn(r.min_inlier_ratio, 0.0, 1.0)) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.min_inlier_ratio must be in 0..1");
+  }
+  if (!finiteIn(o.max_point_motion_px, 0.0, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: max_point_motion_px must be in 0..1e6");
+  }
+  if (!finiteIn(o.kind_visibility_ratio, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: kind_visibility_ratio must be in 0..1");
   }
   if (o.init_refinements < 0 || o.init_refinements > 100) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: init_refinements must be in 0..100");
@@ -112,6 +120,12 @@ struct Localizer::Impl {
   double reference_depth_m = 0;  // median scene depth of the reference render
   int frames_on_reference = 0;
 
+  // Edge kinds the live images show: running inlier ratio per kind [texture, occlusion, crease,
+  // near background] (-1: not measured yet) and the kinds left out of references. A property of
+  // the model and the camera, so reset() keeps it.
+  std::array<double, 4> kind_inlier_mean{-1.0, -1.0, -1.0, -1.0};
+  std::array<bool, 4> kind_dropped{false, false, false, false};
+
   // Motion state.
   std::optional<Pose> last_pose;  // last tracked (or reset) pose
   std::optional<Pose> prev_pose;  // the tracked pose before it
@@ -140,6 +154,18 @@ struct Localizer::Impl {
     t0 = Clock::now();
     Result<EdgeReference> ref = buildEdgeReference(*view, camera, T_world_camera, options.reference);
     if (!ref.ok()) return ref.error();
+    if (kind_dropped[1] || kind_dropped[2] || kind_dropped[3]) {
+      auto dropped = [&](uint32_t kind) {
+        if (kind & kEdgeBackground) return kind_dropped[3];
+        return (kind_dropped[1] && kind == kEdgeOcclusion) || (kind_dropped[2] && kind == kEdgeCrease);
+      };
+      auto keep = [&](std::vector<EdgePoint>& points) {
+        points.erase(std::remove_if(points.begin(), points.end(), [&](const EdgePoint& p) { return dropped(p.kind); }),
+                     points.end());
+      };
+      keep(ref->points);
+      for (std::vector<EdgePoint>& level : ref->coarse_points) keep(level);
+    }
     out.reference_ms += msSince(t0);
     reference = std::move(*ref);
     if (gpu_stages) VKLOC_TRY_STATUS(gpu_stages->setLevelPoints(*reference));
@@ -172,6 +198,61 @@ struct Localizer::Impl {
     return *last_pose * expSE3(scale * xi);
   }
 
+  /// Updates the running inlier ratio per edge kind from a tracked frame and drops the geometric
+  /// kinds the live images do not show (adapt_edge_kinds).
+  void learnEdgeKinds(const TrackQuality& q) {
+    if (!options.adapt_edge_kinds) return;
+    constexpr int kMinPoints = 20;
+    for (size_t k = 0; k < kind_inlier_mean.size(); ++k) {
+      if (kind_dropped[k] || q.kind_points_in_image[k] < kMinPoints) continue;
+      const double r = q.kind_inlier_ratio[k];
+      kind_inlier_mean[k] = kind_inlier_mean[k] < 0 ? r : 0.7 * kind_inlier_mean[k] + 0.3 * r;
+    }
+    if (kind_inlier_mean[0] < 0) return;
+    for (size_t k = 1; k < kind_inlier_mean.size(); ++k) {
+      if (kind_inlier_mean[k] >= 0 && kind_inlier_mean[k] < options.kind_visibility_ratio * kind_inlier_mean[0]) {
+        kind_dropped[k] = true;
+      }
+    }
+  }
+
+  /// The reference without the points that the predicted motion from the last tracked pose to
+  /// `guess` moves more than max_point_motion_px in the image (finest level), or nullopt when
+  /// none is dropped or too few would remain (motion blur smears those points' edges).
+  std::optional<EdgeReference> slowPoints(const Pose& guess) const {
+    if (!(options.max_point_motion_px > 0) || !last_pose || !tracked_since_reset) return std::nullopt;
+    const Pose T_guess_ref = guess.inverse() * reference->T_world_ref;
+    const Pose T_last_ref = last_pose->inverse() * reference->T_world_ref;
+    auto motionPx = [&](const EdgePoint& p) {
+      const Eigen::Vector3d P(p.x, p.y, p.z);
+      const Eigen::Vector3d a = T_guess_ref * P;
+      const Eigen::Vector3d b = T_last_ref * P;
+      if (!(a.z() > 1e-6) || !(b.z() > 1e-6)) return std::numeric_limits<double>::infinity();
+      const double du = camera.fx * (a.x() / a.z() - b.x() / b.z());
+      const double dv = camera.fy * (a.y() / a.z() - b.y() / b.z());
+      return std::sqrt(du * du + dv * dv);
+    };
+    EdgeReference out;
+    out.camera = reference->camera;
+    out.T_world_ref = reference->T_world_ref;
+    size_t dropped = 0;
+    auto filter = [&](const std::vector<EdgePoint>& in, std::vector<EdgePoint>& kept) {
+      kept.reserve(in.size());
+      for (const EdgePoint& p : in) {
+        if (motionPx(p) <= options.max_point_motion_px) kept.push_back(p);
+      }
+      dropped += in.size() - kept.size();
+      return 5 * kept.size() >= in.size() && kept.size() >= 100;
+    };
+    if (!filter(reference->points, out.points)) return std::nullopt;
+    out.coarse_points.resize(reference->coarse_points.size());
+    for (size_t k = 0; k < out.coarse_points.size(); ++k) {
+      if (!filter(reference->coarse_points[k], out.coarse_points[k])) return std::nullopt;
+    }
+    if (dropped == 0) return std::nullopt;
+    return out;
+  }
+
   /// Live stages + alignment on the chosen backend.
   Result<TrackResult> align(const ImageU8& gray, const Pose& guess, bool gpu, LocalizationResult& out,
                             std::optional<LiveFrame>& cpu_live) {
@@ -190,8 +271,9 @@ struct Localizer::Impl {
         out.live_ms += msSince(t0);
       }
       t0 = Clock::now();
-      GpuEdgeAlignment backend(*gpu_stages, &*reference);
-      Result<TrackResult> r = trackFrame(*reference, backend, guess, options.tracker);
+      const std::optional<EdgeReference> slow = slowPoints(guess);
+      GpuEdgeAlignment backend(*gpu_stages, slow ? nullptr : &*reference);
+      Result<TrackResult> r = trackFrame(slow ? *slow : *reference, backend, guess, options.tracker);
       out.align_ms += msSince(t0);
       return r;
     }
@@ -205,7 +287,8 @@ struct Localizer::Impl {
       out.live_ms += msSince(t0);
     }
     t0 = Clock::now();
-    Result<TrackResult> r = trackFrame(*reference, *cpu_live, guess, options.tracker);
+    const std::optional<EdgeReference> slow = slowPoints(guess);
+    Result<TrackResult> r = trackFrame(slow ? *slow : *reference, *cpu_live, guess, options.tracker);
     out.align_ms += msSince(t0);
     return r;
   }
@@ -377,11 +460,13 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
     m.last_pose = track->T_world_camera;
     m.last_pose_t_ns = t_ns;
     m.last_inlier_ratio = track->quality.inlier_ratio;
+    m.learnEdgeKinds(track->quality);
     m.last_lost = false;
     m.tracked_since_reset = true;
   } else {
-    // Keep the last trusted pose; stop extrapolating a motion that was not confirmed.
-    m.prev_pose.reset();
+    // Keep the last trusted pose and its motion: the next guess extrapolates the last tracked
+    // velocity over the time since (predict() scales it by at most 10 frame intervals), so a
+    // camera that keeps moving through a few untrackable frames is found again.
     if (!m.last_pose) m.last_pose = guess;
     m.last_lost = true;
   }

@@ -31,6 +31,23 @@ Pose orthonormalized(const Pose& T) {
   return out;
 }
 
+/// Points whose depth z is at least the `quantile` quantile of the depths of `points`.
+std::vector<EdgePoint> farPoints(const std::vector<EdgePoint>& points, double quantile) {
+  std::vector<float> z;
+  z.reserve(points.size());
+  for (const EdgePoint& p : points) z.push_back(p.z);
+  if (z.empty()) return {};
+  const size_t k = std::min(z.size() - 1, static_cast<size_t>(quantile * static_cast<double>(z.size())));
+  std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(k), z.end());
+  const float threshold = z[k];
+  std::vector<EdgePoint> out;
+  out.reserve(points.size() - k);
+  for (const EdgePoint& p : points) {
+    if (p.z >= threshold) out.push_back(p);
+  }
+  return out;
+}
+
 /// True when the 2x2 bilinear footprint of (u, v) lies inside a w x h image.
 bool footprintInside(double u, double v, int w, int h) { return u >= 0 && v >= 0 && u < w - 1 && v < h - 1; }
 
@@ -174,6 +191,12 @@ Status validateEdgeTrackerOptions(const EdgeTrackerOptions& o) {
   if (o.coarsest_level >= 0 && o.coarsest_level < o.finest_level) {
     return makeError(ErrorCode::kInvalidArgument, "edge tracker: coarsest_level must be -1 or >= finest_level");
   }
+  if (!finiteIn(o.far_first_depth_quantile, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: far_first_depth_quantile must be in 0..1");
+  }
+  if (o.far_first_coarsest_level < -1) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: far_first_coarsest_level must be >= -1");
+  }
   if (!finiteIn(o.min_step, 0.0, 1.0))
     return makeError(ErrorCode::kInvalidArgument, "edge tracker: min_step must be in 0..1");
   if (!finiteIn(o.initial_damping, 1e-12, 1e6) || !finiteIn(o.max_damping, o.initial_damping, 1e12)) {
@@ -296,59 +319,97 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
     uploaded = &points;
     return Status::success();
   };
-  for (int level_index = coarsest; level_index >= options.finest_level; --level_index) {
-    const std::vector<EdgePoint>& points = pointsFor(level_index);
-    if (points.size() < 6) continue;
-    VKLOC_TRY_STATUS(usePoints(points));
-    const double trunc = backend.truncationPx(level_index);
-    auto first = backend.residuals(level_index, T);
-    if (!first.ok()) return first.error();
-    std::vector<float> residuals = std::move(first).value();
-    double lambda = 0;
-    for (int it = 0; it < options.max_iterations; ++it) {
-      const double sigma = estimateTDistributionScale(residuals, options.nu, options.scale_iterations);
-      auto accumulated = backend.accumulate(level_index, T, sigma, options.nu);
-      if (!accumulated.ok()) return accumulated.error();
-      const EdgeNormalEquations& eq = *accumulated;
-      if (eq[kEdgeNormalCountIndex] < 6) break;
-      Matrix6d H;
-      Vector6d g;
-      unpackEdgeNormalEquations(eq, H, g);
-      // Solve (H + lambda diag(H)) delta = -g (eq. 14); damping only after a failed solve or a
-      // rejected step.
-      Vector6d delta = Vector6d::Zero();
-      bool solved = false;
-      while (lambda <= options.max_damping) {
-        Matrix6d A = H;
-        A.diagonal() += lambda * H.diagonal() + Vector6d::Constant(1e-12 * (1.0 + H.diagonal().maxCoeff()));
-        Eigen::LDLT<Matrix6d> ldlt(A);
-        if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
-          delta = ldlt.solve(-g);
-          if (delta.allFinite()) {
-            solved = true;
-            break;
+  std::vector<std::vector<EdgePoint>> far_lists;
+  // Coarse-to-fine Gauss-Newton from T (updated in place); with far_first, pass 0 runs on the
+  // far points only before pass 1 on all points.
+  auto align = [&](bool far_first, int start_level) -> Status {
+    for (int pass = far_first ? 0 : 1; pass < 2; ++pass) {
+      for (int level_index = start_level; level_index >= options.finest_level; --level_index) {
+        const std::vector<EdgePoint>& points =
+            pass == 0 ? far_lists[static_cast<size_t>(level_index)] : pointsFor(level_index);
+        if (points.size() < 6) continue;
+        VKLOC_TRY_STATUS(usePoints(points));
+        const double trunc = backend.truncationPx(level_index);
+        auto first = backend.residuals(level_index, T);
+        if (!first.ok()) return first.error();
+        std::vector<float> residuals = std::move(first).value();
+        double lambda = 0;
+        for (int it = 0; it < options.max_iterations; ++it) {
+          const double sigma = estimateTDistributionScale(residuals, options.nu, options.scale_iterations);
+          auto accumulated = backend.accumulate(level_index, T, sigma, options.nu);
+          if (!accumulated.ok()) return accumulated.error();
+          const EdgeNormalEquations& eq = *accumulated;
+          if (eq[kEdgeNormalCountIndex] < 6) break;
+          Matrix6d H;
+          Vector6d g;
+          unpackEdgeNormalEquations(eq, H, g);
+          // Solve (H + lambda diag(H)) delta = -g (eq. 14); damping only after a failed solve or a
+          // rejected step.
+          Vector6d delta = Vector6d::Zero();
+          bool solved = false;
+          while (lambda <= options.max_damping) {
+            Matrix6d A = H;
+            A.diagonal() += lambda * H.diagonal() + Vector6d::Constant(1e-12 * (1.0 + H.diagonal().maxCoeff()));
+            Eigen::LDLT<Matrix6d> ldlt(A);
+            if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
+              delta = ldlt.solve(-g);
+              if (delta.allFinite()) {
+                solved = true;
+                break;
+              }
+            }
+            lambda = lambda > 0 ? lambda * 10 : options.initial_damping;
+          }
+          if (!solved) break;
+          ++iterations;
+          const Pose T_new = orthonormalized(applyLeftIncrement(T, delta));
+          auto evaluated = backend.residuals(level_index, T_new);
+          if (!evaluated.ok()) return evaluated.error();
+          std::vector<float> residuals_new = std::move(evaluated).value();
+          const double cost_old = robustCost(residuals, sigma, options.nu, trunc);
+          const double cost_new = robustCost(residuals_new, sigma, options.nu, trunc);
+          if (cost_new <= cost_old) {
+            T = T_new;
+            residuals = std::move(residuals_new);
+            lambda = lambda > options.initial_damping ? lambda * 0.1 : 0.0;
+            if (delta.norm() < options.min_step) break;
+          } else {
+            lambda = lambda > 0 ? lambda * 10 : options.initial_damping;
+            if (lambda > options.max_damping || delta.norm() < options.min_step) break;
           }
         }
-        lambda = lambda > 0 ? lambda * 10 : options.initial_damping;
-      }
-      if (!solved) break;
-      ++iterations;
-      const Pose T_new = orthonormalized(applyLeftIncrement(T, delta));
-      auto evaluated = backend.residuals(level_index, T_new);
-      if (!evaluated.ok()) return evaluated.error();
-      std::vector<float> residuals_new = std::move(evaluated).value();
-      const double cost_old = robustCost(residuals, sigma, options.nu, trunc);
-      const double cost_new = robustCost(residuals_new, sigma, options.nu, trunc);
-      if (cost_new <= cost_old) {
-        T = T_new;
-        residuals = std::move(residuals_new);
-        lambda = lambda > options.initial_damping ? lambda * 0.1 : 0.0;
-        if (delta.norm() < options.min_step) break;
-      } else {
-        lambda = lambda > 0 ? lambda * 10 : options.initial_damping;
-        if (lambda > options.max_damping || delta.norm() < options.min_step) break;
       }
     }
+    return Status::success();
+  };
+  VKLOC_TRY_STATUS(align(false, coarsest));
+  if (options.far_first_depth_quantile > 0) {
+    // Second hypothesis from the same guess, far points first; the pose whose finest-level
+    // inlier count is higher wins.
+    for (int level_index = 0; level_index < levels; ++level_index) {
+      far_lists.push_back(farPoints(pointsFor(level_index), options.far_first_depth_quantile));
+    }
+    const Pose T_plain = T;
+    T = T_camera_ref_guess;
+    const int far_coarsest =
+        options.far_first_coarsest_level < 0
+            ? coarsest
+            : std::max(options.finest_level, std::min(options.far_first_coarsest_level, levels - 1));
+    VKLOC_TRY_STATUS(align(true, far_coarsest));
+    const std::vector<EdgePoint>& finest_points = pointsFor(options.finest_level);
+    VKLOC_TRY_STATUS(usePoints(finest_points));
+    auto inlierCount = [&](const Pose& T_cr) -> Result<int> {
+      auto r = backend.residuals(options.finest_level, T_cr);
+      if (!r.ok()) return r.error();
+      int n = 0;
+      for (float v : *r) n += v >= 0 && v < options.inlier_threshold_px;
+      return n;
+    };
+    auto plain_inliers = inlierCount(T_plain);
+    if (!plain_inliers.ok()) return plain_inliers.error();
+    auto far_inliers = inlierCount(T);
+    if (!far_inliers.ok()) return far_inliers.error();
+    if (*far_inliers <= *plain_inliers) T = T_plain;
   }
 
   // Quality and covariance on the finest level used.
@@ -366,12 +427,21 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
   const std::vector<float>& residuals = *final_residuals;
   int inliers = 0;
   double inlier_sum = 0;
+  std::array<int, 4> kind_inliers{};
+  auto kindIndex = [](uint32_t kind) {
+    if (kind & kEdgeBackground) return 3;
+    return kind == kEdgeOcclusion ? 1 : kind == kEdgeCrease ? 2 : kind == kEdgeTexture ? 0 : -1;
+  };
   for (size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3d p = T * Eigen::Vector3d(points[i].x, points[i].y, points[i].z);
+    const int kind = kindIndex(points[i].kind);
     if (p.z() > 1e-6) {
       const double u = finest.fx * p.x() / p.z() + finest.cx;
       const double v = finest.fy * p.y() / p.z() + finest.cy;
-      if (footprintInside(u, v, finest.width, finest.height)) ++q.points_in_image;
+      if (footprintInside(u, v, finest.width, finest.height)) {
+        ++q.points_in_image;
+        if (kind >= 0) ++q.kind_points_in_image[static_cast<size_t>(kind)];
+      }
     }
     const float r = i < residuals.size() ? residuals[i] : kInvalidResidual;
     if (r < 0) continue;
@@ -379,9 +449,14 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
     if (r < options.inlier_threshold_px) {
       ++inliers;
       inlier_sum += r;
+      if (kind >= 0) ++kind_inliers[static_cast<size_t>(kind)];
     }
   }
   q.inlier_ratio = q.points_in_image > 0 ? static_cast<double>(inliers) / q.points_in_image : 0.0;
+  for (size_t k = 0; k < q.kind_inlier_ratio.size(); ++k) {
+    q.kind_inlier_ratio[k] =
+        q.kind_points_in_image[k] > 0 ? static_cast<double>(kind_inliers[k]) / q.kind_points_in_image[k] : 0.0;
+  }
   auto spread = [&](const Pose& T_cr) {
     Eigen::Vector2d sum = Eigen::Vector2d::Zero();
     Eigen::Vector2d sum2 = Eigen::Vector2d::Zero();

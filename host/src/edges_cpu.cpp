@@ -454,6 +454,9 @@ Status validateReferenceEdgeOptions(const ReferenceEdgeOptions& o) {
   if (!finiteIn(o.crease_angle_deg, 0.0, 180.0)) {
     return makeError(ErrorCode::kInvalidArgument, "reference edges: crease_angle_deg must be in 0..180");
   }
+  if (o.hole_gap_px < 0 || o.hole_gap_px > 4096) {
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: hole_gap_px must be in 0..4096");
+  }
   if (o.cell_px < 1 || o.cell_px > 4096) {
     return makeError(ErrorCode::kInvalidArgument, "reference edges: cell_px must be in 1..4096");
   }
@@ -510,6 +513,32 @@ ReferenceLevel downsampleReference(const ReferenceLevel& in) {
   return out;
 }
 
+/// True when the surface of the near pixel (x, y) continues within `gap` pixels beyond its
+/// depth jump in direction (sx, sy): some pixel x + k sx, 2 <= k <= gap, has the depth that the
+/// near surface's inverse depth, extrapolated linearly along the line, predicts there (within
+/// `ratio`). Inverse depth of a plane is linear in the image, so a hole in a wall is found.
+bool nearSurfaceResumes(const ImageF32& D, int x, int y, int sx, int sy, int gap, double ratio) {
+  const float zp = D.at(x, y);
+  const double izp = 1.0 / zp;
+  double diz = 0;
+  const int bx = x - sx;
+  const int by = y - sy;
+  if (bx >= 0 && by >= 0 && bx < D.width && by < D.height) {
+    const float zb = D.at(bx, by);
+    if (zb > 0 && std::isfinite(zb) && continuous(zp, zb, ratio)) diz = izp - 1.0 / zb;
+  }
+  for (int k = 2; k <= gap; ++k) {
+    const int qx = x + k * sx;
+    const int qy = y + k * sy;
+    if (qx < 0 || qy < 0 || qx >= D.width || qy >= D.height) return false;
+    const double iz = izp + k * diz;
+    if (!(iz > 0)) return false;
+    const float zq = D.at(qx, qy);
+    if (zq > 0 && std::isfinite(zq) && continuous(static_cast<float>(1.0 / iz), zq, ratio)) return true;
+  }
+  return false;
+}
+
 /// Stage 1 (detectReferenceEdges); when texture_offsets is given it receives, per texture edge
 /// pixel, the sub-pixel offset (du, dv) of the edge from the pixel centre (2 channels, pixels).
 Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const ReferenceEdgeOptions& options,
@@ -554,6 +583,44 @@ Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const Refer
       }
     }
   }
+  // Rims of model holes: drop their occlusion flags and remember them for the texture edges.
+  ImageU8 hole_rim;
+  if (options.occlusion_edges && options.hole_gap_px > 0) {
+    hole_rim = ImageU8(w, h, 1, 0);
+    struct Side {
+      uint8_t flag;
+      int sx, sy;
+    };
+    constexpr Side kSides[4] = {{kEdgePixelOcclusionRight, 1, 0},
+                                {kEdgePixelOcclusionLeft, -1, 0},
+                                {kEdgePixelOcclusionDown, 0, 1},
+                                {kEdgePixelOcclusionUp, 0, -1}};
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        uint8_t& f = flags.at(x, y);
+        for (const Side& side : kSides) {
+          if (!(f & side.flag)) continue;
+          if (!nearSurfaceResumes(D, x, y, side.sx, side.sy, options.hole_gap_px, ratio)) continue;
+          f &= static_cast<uint8_t>(~side.flag);
+          hole_rim.at(x, y) = 1;
+          const int qx = x + side.sx;
+          const int qy = y + side.sy;
+          if (qx >= 0 && qy >= 0 && qx < w && qy < h) hole_rim.at(qx, qy) = 1;
+        }
+      }
+    }
+  }
+  auto nearHoleRim = [&](int x, int y) {
+    if (hole_rim.empty()) return false;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = x + dx;
+        const int ny = y + dy;
+        if (nx >= 0 && ny >= 0 && nx < w && ny < h && hole_rim.at(nx, ny)) return true;
+      }
+    }
+    return false;
+  };
   if (options.texture_edges) {
     EdgeGradients gradients;
     ImageU8 edge_map;
@@ -577,7 +644,7 @@ Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const Refer
             flags.at(nx, ny) &= kEdgePixelTexture;
           }
         }
-        if (has_surface) {
+        if (has_surface && !nearHoleRim(x, y)) {
           flags.at(x, y) |= kEdgePixelTexture;
           if (texture_offsets)
             subpixelOffset(gradients, x, y, texture_offsets->at(x, y, 0), texture_offsets->at(x, y, 1));
@@ -615,8 +682,20 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
     const float z = depth.at(x, y);
     return std::isfinite(z) && z > 0 ? z : 0.0f;
   };
+  int px = 0, py = 0;  // pixel whose flags are emitted
+  auto nearBackground = [&]() {
+    for (int dy = -2; dy <= 2; ++dy) {
+      for (int dx = -2; dx <= 2; ++dx) {
+        const int nx = px + dx;
+        const int ny = py + dy;
+        if (nx >= 0 && ny >= 0 && nx < w && ny < h && depthAt(nx, ny) <= 0) return true;
+      }
+    }
+    return false;
+  };
   auto emit = [&](double u, double v, double z, uint32_t kind) {
     // Eq. 3: P = pi^-1(u, Z) with metric depth Z (camera z).
+    if (nearBackground()) kind |= kEdgeBackground;
     EdgePoint p;
     p.x = static_cast<float>(z * (u - camera.cx) / camera.fx);
     p.y = static_cast<float>(z * (v - camera.cy) / camera.fy);
@@ -637,6 +716,8 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
     for (int x = 0; x < w; ++x) {
       const uint8_t f = flags.at(x, y);
       if (!f) continue;
+      px = x;
+      py = y;
       const float zp = depthAt(x, y);
       if (f & kEdgePixelTexture) {
         // On or next to a depth jump the edge belongs to the near surface: take the smallest

@@ -143,6 +143,10 @@ enum EdgeKind : uint32_t {
   kEdgeTexture = 1u << 0,    ///< Intensity edge in the rendered gray image.
   kEdgeOcclusion = 1u << 1,  ///< Depth discontinuity (silhouette, occluding edge), near surface.
   kEdgeCrease = 1u << 2,     ///< Normal discontinuity.
+  /// Modifier bit ORed onto one of the kinds above: the point's pixel lies within 2 pixels of
+  /// background (no surface) in the render: a silhouette against the sky or the rim of a hole
+  /// through a damaged model (which live images do not show).
+  kEdgeBackground = 1u << 3,
 };
 
 /// A 3D edge point in the reference camera frame; 16 bytes, the std430 layout of a vec4.
@@ -161,11 +165,16 @@ struct ReferenceEdgeOptions {
   bool crease_edges = true;        ///< Use normal discontinuities.
   double depth_jump_ratio = 0.05;  ///< Depth discontinuity: |z_a - z_b| > ratio * min(z_a, z_b).
   double crease_angle_deg = 30.0;  ///< Crease: angle between neighbouring normals above this, degrees.
-  EdgeDetectorOptions detector;    ///< Texture edge detector (as for live images).
-  int cell_px = 16;                ///< Subsampling grid cell side, pixels.
-  int max_points_per_cell = 6;     ///< At most this many points per cell.
-  int max_points = 4000;           ///< Total budget of points per level (> 0).
-  int levels = 3;                  ///< Pyramid levels of buildEdgeReference (1..8), as the live frame's.
+  /// Model holes: an occlusion edge whose near surface resumes (inverse depth extrapolated along
+  /// the image line, within depth_jump_ratio) at most this many pixels beyond the far side is
+  /// the rim of a hole in the model (not visible in live images); it and the texture edges
+  /// within one pixel of it are dropped. 0 = keep every occlusion edge.
+  int hole_gap_px = 24;
+  EdgeDetectorOptions detector;  ///< Texture edge detector (as for live images).
+  int cell_px = 16;              ///< Subsampling grid cell side, pixels.
+  int max_points_per_cell = 6;   ///< At most this many points per cell.
+  int max_points = 4000;         ///< Total budget of points per level (> 0).
+  int levels = 3;                ///< Pyramid levels of buildEdgeReference (1..8), as the live frame's.
 };
 
 /// Checks ranges of ReferenceEdgeOptions; kInvalidArgument naming the field otherwise.

@@ -83,6 +83,22 @@ struct LocalizerOptions {
   /// reference at the estimate and align again, up to this many times (widens the basin of
   /// convergence of the initial pose).
   int init_refinements = 4;
+  /// Learn which geometric edges the live images show (an unlit render's creases and silhouettes
+  /// may have no intensity edge in them, and rims of model holes none at all): after each tracked
+  /// frame, the running mean (weight 0.3) of the inlier ratio of occlusion points, of crease
+  /// points and of points near background (kEdgeBackground) is compared with the texture
+  /// points'; a kind below kind_visibility_ratio times the texture's is left out of later
+  /// references. Measured at true poses: room_easy creases 0.02 and silhouettes 0.00 against
+  /// texture 0.99; city_hard silhouettes 0.03 and points near background 0.43-0.52 against
+  /// 0.83 (they pull frame 12 to 1.2 m); Castle-simu all kinds 0.86-1.0 (kept).
+  bool adapt_edge_kinds = true;
+  double kind_visibility_ratio = 0.7;  ///< See adapt_edge_kinds (0..1).
+  /// Leave out of a frame's alignment the reference points that the predicted motion (last
+  /// tracked pose to the guess) moves more than this in the image, pixels (0 = keep all; not
+  /// applied when fewer than a fifth of a level's points, or fewer than 100, would remain):
+  /// surfaces passing close to the camera are smeared by motion blur and their edges alias onto
+  /// wrong ones (city_hard frames 52-58, 0.3 m from a wall: errors 3-11 mm instead of 6-24 mm).
+  double max_point_motion_px = 40.0;
   /// With kAuto and a Vulkan device: time the CPU and Vulkan live stages + alignment on the first
   /// frame and keep the faster one (instead of deciding by the device type alone).
   bool calibrate_backend = false;
