@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "text_parse.hpp"
 #include "vkloc/sequence.hpp"
 
 namespace vkloc {
@@ -20,41 +21,10 @@ namespace vkloc {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string_view trim(std::string_view s) {
-  const char* ws = " \t\r\n\v\f";
-  const size_t begin = s.find_first_not_of(ws);
-  if (begin == std::string_view::npos) return {};
-  const size_t end = s.find_last_not_of(ws);
-  return s.substr(begin, end - begin + 1);
-}
-
-std::vector<std::string_view> splitCsv(std::string_view line) {
-  std::vector<std::string_view> fields;
-  size_t start = 0;
-  while (true) {
-    const size_t comma = line.find(',', start);
-    if (comma == std::string_view::npos) {
-      fields.push_back(trim(line.substr(start)));
-      return fields;
-    }
-    fields.push_back(trim(line.substr(start, comma - start)));
-    start = comma + 1;
-  }
-}
-
-std::string shown(std::string_view token) {
-  std::string out = "'";
-  for (size_t i = 0; i < token.size() && i < 40; ++i) {
-    const auto c = static_cast<unsigned char>(token[i]);
-    out += (c >= 0x20 && c < 0x7f) ? std::string(1, static_cast<char>(c)) : fmt::format("\\x{:02x}", c);
-  }
-  return out + (token.size() > 40 ? "...'" : "'");
-}
-
-Error lineError(const std::string& path, size_t line, const std::string& what) {
-  return makeError(ErrorCode::kMalformedInput, fmt::format("{}:{}: {}", path, line, what));
-}
+using text::lineError;
+using text::shown;
+using text::splitCsv;
+using text::trim;
 
 bool parseNs(std::string_view t, int64_t& out) {
   const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), out);

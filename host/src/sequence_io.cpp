@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "text_parse.hpp"
 #include "vkloc/sequence.hpp"
 
 namespace vkloc {
@@ -23,17 +24,13 @@ namespace vkloc {
 namespace {
 
 namespace fs = std::filesystem;
+using text::lineError;
+using text::shown;
+using text::splitCsv;
+using text::trim;
 
 // ---------------------------------------------------------------------------------------------
 // Text helpers.
-
-std::string_view trim(std::string_view s) {
-  const char* ws = " \t\r\n\v\f";
-  const size_t begin = s.find_first_not_of(ws);
-  if (begin == std::string_view::npos) return {};
-  const size_t end = s.find_last_not_of(ws);
-  return s.substr(begin, end - begin + 1);
-}
 
 bool isBlankOrComment(std::string_view line) {
   const std::string_view t = trim(line);
@@ -81,41 +78,6 @@ std::vector<std::string_view> splitWhitespace(std::string_view line, bool commas
     if (i > start) fields.push_back(line.substr(start, i - start));
   }
   return fields;
-}
-
-/// Splits a CSV line on commas and trims every field (empty fields are kept).
-std::vector<std::string_view> splitCsv(std::string_view line) {
-  std::vector<std::string_view> fields;
-  size_t start = 0;
-  while (true) {
-    const size_t comma = line.find(',', start);
-    if (comma == std::string_view::npos) {
-      fields.push_back(trim(line.substr(start)));
-      break;
-    }
-    fields.push_back(trim(line.substr(start, comma - start)));
-    start = comma + 1;
-  }
-  return fields;
-}
-
-/// Quotes a token for an error message (shortened, non-printable bytes escaped).
-std::string shown(std::string_view token) {
-  std::string out = "'";
-  for (size_t i = 0; i < token.size() && i < 40; ++i) {
-    const auto c = static_cast<unsigned char>(token[i]);
-    if (c >= 0x20 && c < 0x7f) {
-      out += static_cast<char>(c);
-    } else {
-      out += fmt::format("\\x{:02x}", c);
-    }
-  }
-  if (token.size() > 40) out += "...";
-  return out + "'";
-}
-
-Error lineError(const std::string& path, size_t line, const std::string& what) {
-  return makeError(ErrorCode::kMalformedInput, fmt::format("{}:{}: {}", path, line, what));
 }
 
 /// Parses a finite double (leading '+' allowed). Empty string on success, else what is wrong.
