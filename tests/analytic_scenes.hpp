@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "vkloc/camera.hpp"
+#include "vkloc/image.hpp"
 #include "vkloc/model.hpp"
 #include "vkloc/pose.hpp"
 
@@ -353,6 +354,24 @@ inline std::vector<std::optional<double>> rayCastDepth(const Model& m, const Pin
     }
   }
   return depth;
+}
+
+/// Gray image of a box-filtered step edge along the line n . (u, v) = c (n unit, pixels): each
+/// pixel is 60 + 120 x the fraction of its area (8x8 samples) on the bright side n . x > c.
+inline ImageU8 makeTiltedStepImage(int width, int height, const Eigen::Vector2d& n, double c) {
+  ImageU8 gray(width, height, 1, 0);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      double covered = 0;
+      for (int sy = 0; sy < 8; ++sy) {
+        for (int sx = 0; sx < 8; ++sx) {
+          covered += n.dot(Eigen::Vector2d(x - 0.4375 + sx / 8.0, y - 0.4375 + sy / 8.0)) > c;
+        }
+      }
+      gray.at(x, y) = static_cast<uint8_t>(std::lround(60 + 120 * covered / 64));
+    }
+  }
+  return gray;
 }
 
 }  // namespace vkloc::test

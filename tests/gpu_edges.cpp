@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <random>
 
+#include "analytic_scenes.hpp"
 #include "gpu_test_support.hpp"
 #include "vkloc/demo.hpp"
 
@@ -307,18 +308,7 @@ TEST_F(GpuEdges, SubpixelEdgeLinesGiveTheDistanceToATiltedStep) {
   const double angle = 20.0 * M_PI / 180.0;
   const Eigen::Vector2d n(std::cos(angle), std::sin(angle));
   const double c = n.dot(Eigen::Vector2d(80.3, 60.0));
-  ImageU8 gray(w, h, 1, 0);
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      double covered = 0;
-      for (int sy = 0; sy < 8; ++sy) {
-        for (int sx = 0; sx < 8; ++sx) {
-          covered += n.dot(Eigen::Vector2d(x - 0.4375 + sx / 8.0, y - 0.4375 + sy / 8.0)) > c;
-        }
-      }
-      gray.at(x, y) = static_cast<uint8_t>(std::lround(60 + 120 * covered / 64));
-    }
-  }
+  const ImageU8 gray = test::makeTiltedStepImage(w, h, n, c);
   const PinholeCamera cam{200.0, 200.0, 79.5, 59.5, w, h};
   LiveFrameOptions options;
   options.levels = 1;
