@@ -247,8 +247,10 @@ double distanceToSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, con
   return (a + t * ab - p).norm();
 }
 
-double distanceToBoxEdges(const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
-  double best = 1e30;
+/// The 12 edges of an axis-aligned box, as segment end points.
+std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> boxEdges(const Eigen::Vector3d& lo,
+                                                                  const Eigen::Vector3d& hi) {
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> edges;
   for (int axis = 0; axis < 3; ++axis) {
     for (int k = 0; k < 4; ++k) {
       Eigen::Vector3d a, b;
@@ -260,9 +262,15 @@ double distanceToBoxEdges(const Eigen::Vector3d& p, const Eigen::Vector3d& lo, c
           a[c] = b[c] = ((k >> bit++) & 1) ? hi[c] : lo[c];
         }
       }
-      best = std::min(best, distanceToSegment(p, a, b));
+      edges.emplace_back(a, b);
     }
   }
+  return edges;
+}
+
+double distanceToBoxEdges(const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  double best = 1e30;
+  for (const auto& [a, b] : boxEdges(lo, hi)) best = std::min(best, distanceToSegment(p, a, b));
   return best;
 }
 
@@ -275,22 +283,11 @@ double imageDistanceToBoxEdges(const Eigen::Vector3d& p_camera, const Eigen::Vec
   const Pose T_camera_world = T_world_camera.inverse();
   const Eigen::Vector2d uv = project(p_camera);
   double best = 1e30;
-  for (int axis = 0; axis < 3; ++axis) {
-    for (int k = 0; k < 4; ++k) {
-      Eigen::Vector3d a, b;
-      for (int c = 0, bit = 0; c < 3; ++c) {
-        if (c == axis) {
-          a[c] = lo[c];
-          b[c] = hi[c];
-        } else {
-          a[c] = b[c] = ((k >> bit++) & 1) ? hi[c] : lo[c];
-        }
-      }
-      const Eigen::Vector2d A = project(T_camera_world * a), B = project(T_camera_world * b);
-      const Eigen::Vector2d ab = B - A;
-      const double t = std::clamp((uv - A).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
-      best = std::min(best, (A + t * ab - uv).norm());
-    }
+  for (const auto& [a, b] : boxEdges(lo, hi)) {
+    const Eigen::Vector2d A = project(T_camera_world * a), B = project(T_camera_world * b);
+    const Eigen::Vector2d ab = B - A;
+    const double t = std::clamp((uv - A).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (A + t * ab - uv).norm());
   }
   return best;
 }

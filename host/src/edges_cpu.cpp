@@ -11,6 +11,17 @@
 namespace vkloc {
 namespace {
 
+/// A geometric edge flag and the 4-neighbour it points to (pixels).
+struct EdgeDirection {
+  uint8_t flag;
+  int dx, dy;
+};
+constexpr EdgeDirection kOcclusionDirections[4] = {{kEdgePixelOcclusionRight, 1, 0},
+                                                   {kEdgePixelOcclusionLeft, -1, 0},
+                                                   {kEdgePixelOcclusionDown, 0, 1},
+                                                   {kEdgePixelOcclusionUp, 0, -1}};
+constexpr EdgeDirection kCreaseDirections[2] = {{kEdgePixelCreaseRight, 1, 0}, {kEdgePixelCreaseDown, 0, 1}};
+
 constexpr double kPi = 3.14159265358979323846;
 
 cv::Mat wrap(const ImageF32& image) {
@@ -587,24 +598,16 @@ Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const Refer
   ImageU8 hole_rim;
   if (options.occlusion_edges && options.hole_gap_px > 0) {
     hole_rim = ImageU8(w, h, 1, 0);
-    struct Side {
-      uint8_t flag;
-      int sx, sy;
-    };
-    constexpr Side kSides[4] = {{kEdgePixelOcclusionRight, 1, 0},
-                                {kEdgePixelOcclusionLeft, -1, 0},
-                                {kEdgePixelOcclusionDown, 0, 1},
-                                {kEdgePixelOcclusionUp, 0, -1}};
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) {
         uint8_t& f = flags.at(x, y);
-        for (const Side& side : kSides) {
+        for (const EdgeDirection& side : kOcclusionDirections) {
           if (!(f & side.flag)) continue;
-          if (!nearSurfaceResumes(D, x, y, side.sx, side.sy, options.hole_gap_px, ratio)) continue;
+          if (!nearSurfaceResumes(D, x, y, side.dx, side.dy, options.hole_gap_px, ratio)) continue;
           f &= static_cast<uint8_t>(~side.flag);
           hole_rim.at(x, y) = 1;
-          const int qx = x + side.sx;
-          const int qy = y + side.sy;
+          const int qx = x + side.dx;
+          const int qy = y + side.dy;
           if (qx >= 0 && qy >= 0 && qx < w && qy < h) hole_rim.at(qx, qy) = 1;
         }
       }
@@ -703,15 +706,6 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
     p.kind = kind;
     points.push_back(p);
   };
-  struct Dir {
-    uint8_t flag;
-    int dx, dy;
-  };
-  constexpr Dir kOcclusion[4] = {{kEdgePixelOcclusionRight, 1, 0},
-                                 {kEdgePixelOcclusionLeft, -1, 0},
-                                 {kEdgePixelOcclusionDown, 0, 1},
-                                 {kEdgePixelOcclusionUp, 0, -1}};
-  constexpr Dir kCrease[2] = {{kEdgePixelCreaseRight, 1, 0}, {kEdgePixelCreaseDown, 0, 1}};
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
       const uint8_t f = flags.at(x, y);
@@ -738,7 +732,7 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
         }
       }
       if (zp <= 0) continue;
-      for (const Dir& d : kOcclusion) {
+      for (const EdgeDirection& d : kOcclusionDirections) {
         if (!(f & d.flag)) continue;
         // Near surface extrapolated half a pixel towards the jump when the pixel behind is
         // on the same surface.
@@ -748,7 +742,7 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
         if (!(z > 0)) z = zp;
         emit(x + 0.5 * d.dx, y + 0.5 * d.dy, z, kEdgeOcclusion);
       }
-      for (const Dir& d : kCrease) {
+      for (const EdgeDirection& d : kCreaseDirections) {
         if (!(f & d.flag)) continue;
         const float zq = depthAt(x + d.dx, y + d.dy);
         if (zq <= 0) continue;
