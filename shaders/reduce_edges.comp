@@ -8,7 +8,8 @@
 // J = [G_u G_v] [fx/z 0 -fx x/z^2; 0 fy/z -fy y/z^2] [I | -hat(p)].
 // kMode 0: writes r per point (-1 when invalid). kMode 1: accumulates the 29 normal-equation
 // values (edge_tracker.hpp layout) with t-distribution weights w = (nu + 1) / (nu + (r/sigma)^2)
-// in vec4 accumulators, reduced by subgroupAdd and per workgroup into PARTIALS[group * 8 + k].
+// in vec4 accumulators, reduced by subgroupAdd and per workgroup into PARTIALS[group * 8 + k];
+// sigma is pushed (robust.x) or, with robust.w = 1, read from CONTROL.sigma_px (edge_scale.comp).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #include "edge_layout.h"
@@ -22,6 +23,7 @@ layout(set = 0, binding = EDGE_BINDING_LINES, rgba32f) readonly uniform image2D 
 layout(std430, set = 0, binding = EDGE_BINDING_POINTS) readonly buffer Points { vec4 points[]; };
 layout(std430, set = 0, binding = EDGE_BINDING_RESIDUALS) writeonly buffer Residuals { float residuals[]; };
 layout(std430, set = 0, binding = EDGE_BINDING_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
+layout(std430, set = 0, binding = EDGE_BINDING_CONTROL) readonly buffer Control { EdgeControl control; };
 
 shared vec4 subgroup_sums[64][EDGE_REDUCE_VEC4S];
 
@@ -31,6 +33,8 @@ void main() {
   vec4 a4 = vec4(0), a5 = vec4(0), a6 = vec4(0), a7 = vec4(0);
   float fx = pc.intrinsics.x, fy = pc.intrinsics.y, cx = pc.intrinsics.z, cy = pc.intrinsics.w;
   float trunc = pc.truncation_px;
+  // Scale of the weights: pushed, or estimated by edge_scale.comp in the same submission.
+  float sigma = pc.robust.w > 0.5 ? control.sigma_px : pc.robust.x;
   for (uint i = gl_GlobalInvocationID.x; i < pc.point_count; i += stride) {
     vec4 P = vec4(points[i].xyz, 1.0);
     vec3 p = vec3(dot(pc.pose_row0, P), dot(pc.pose_row1, P), dot(pc.pose_row2, P));
@@ -91,7 +95,7 @@ void main() {
     float gb = g.y * fy * iz;
     vec3 jt = vec3(ga, gb, -(ga * p.x + gb * p.y) * iz);
     vec3 jr = cross(p, jt);
-    float s = r / pc.robust.x;
+    float s = r / sigma;
     float w = (pc.robust.y + 1.0) / (pc.robust.y + s * s);
     vec3 wt = w * jt;
     vec3 wr = w * jr;

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <optional>
+#include <string>
 
 #include "context.hpp"
 #include "gpu_test_support.hpp"
@@ -61,18 +63,28 @@ TEST_F(GpuContextTest, ValidationMessagesAreCounted) {
 }
 
 TEST(GpuNoDriver, MissingDriverIsAOneLineErrorNamingThePackage) {
-  // Point the loader at a driver manifest that does not exist: no device, no crash.
-  const char* saved = std::getenv("VK_ICD_FILENAMES");
-  const std::string saved_value = saved ? saved : "";
+  // Point the loader at a driver manifest that does not exist: no device, no crash. Both the
+  // current (VK_DRIVER_FILES) and the older (VK_ICD_FILENAMES) variable are set, since the
+  // current one wins when the environment already names a driver; VK_ADD_DRIVER_FILES is
+  // cleared for the same reason.
+  const char* kVariables[3] = {"VK_DRIVER_FILES", "VK_ICD_FILENAMES", "VK_ADD_DRIVER_FILES"};
+  std::optional<std::string> saved[3];
+  for (int i = 0; i < 3; ++i) {
+    if (const char* v = std::getenv(kVariables[i])) saved[i] = v;
+  }
+  setenv("VK_DRIVER_FILES", "/nonexistent/vkloc_icd.json", 1);
   setenv("VK_ICD_FILENAMES", "/nonexistent/vkloc_icd.json", 1);
+  unsetenv("VK_ADD_DRIVER_FILES");
   auto devices = GpuContext::listDevices();
   GpuOptions options;
   options.validation = 0;
   auto ctx = GpuContext::create(options);
-  if (saved)
-    setenv("VK_ICD_FILENAMES", saved_value.c_str(), 1);
-  else
-    unsetenv("VK_ICD_FILENAMES");
+  for (int i = 0; i < 3; ++i) {
+    if (saved[i])
+      setenv(kVariables[i], saved[i]->c_str(), 1);
+    else
+      unsetenv(kVariables[i]);
+  }
   ASSERT_FALSE(devices.ok());
   ASSERT_FALSE(ctx.ok());
   EXPECT_EQ(ctx.error().code, ErrorCode::kNoDevice);

@@ -297,6 +297,22 @@ TEST_F(GpuEdges, ResidualsAndNormalEquationsMatchCpuOnTheSameField) {
     for (int i = 0; i < kEdgeNormalCountIndex; ++i) {
       EXPECT_NEAR((*gpu_eq)[i], cpu_eq[i], 1e-4 * scale[i] + 1e-12) << "value " << i;
     }
+
+    // Fused evaluation (residuals -> scale on the device -> normal equations, one submission):
+    // the scale within 1e-5 relative of the host's double-precision estimate from the same
+    // residuals, the residuals as above, the normal equations as accumulate() with that scale.
+    auto fused = stages->evaluate(T_eval, level, nu, 5, 0.05);
+    ASSERT_TRUE(fused.ok()) << fused.error().message;
+    ASSERT_EQ(fused->residuals.size(), cpu_r.size());
+    for (size_t i = 0; i < cpu_r.size(); ++i) ASSERT_EQ(fused->residuals[i], (*gpu_r)[i]) << "point " << i;
+    const double host_sigma = estimateTDistributionScale(fused->residuals, nu, 5, 0.05);
+    EXPECT_NEAR(fused->sigma_px, host_sigma, 1e-5 * host_sigma);
+    ASSERT_TRUE(fused->eq.has_value());
+    const EdgeNormalEquations cpu_fused = accumulateEdgeNormalEquations(points, T_eval, L, fused->sigma_px, nu);
+    EXPECT_EQ((*fused->eq)[kEdgeNormalCountIndex], cpu_fused[kEdgeNormalCountIndex]);
+    for (int i = 0; i < kEdgeNormalCountIndex; ++i) {
+      EXPECT_NEAR((*fused->eq)[i], cpu_fused[i], 2e-4 * scale[i] + 1e-12) << "fused value " << i;
+    }
   }
 }
 

@@ -113,7 +113,10 @@ TEST_F(GpuRender, BoxDepthSilhouetteAndNormalsMatchAnalytic) {
       if (std::abs(z - hit->t) / hit->t < 1e-5) worst_normal_deg = std::max(worst_normal_deg, angle);
     }
   }
-  EXPECT_LT(worst, 1e-5);
+  // The requirement (1e-4 relative). Measured: lavapipe < 1e-5; NVIDIA H100 1.3e-5, where
+  // vertices snap to the sub-pixel grid (subPixelPrecisionBits) and faces seen at a grazing
+  // angle change depth fastest across a pixel.
+  EXPECT_LT(worst, 1e-4);
   EXPECT_LT(worst_normal_deg, 0.5);
   EXPECT_EQ(silhouetteErrorsBeyondOnePixel(out.depth, analytic), 0);
   EXPECT_EQ(silhouetteErrorsBeyondOnePixel(analytic, out.depth), 0);
@@ -139,7 +142,9 @@ TEST_F(GpuRender, SphereMatchesRayCastAndReference) {
     }
   }
   EXPECT_GT(compared, 1500);
-  EXPECT_LT(worst, 1e-5);
+  // 1e-4 relative, as above: lavapipe < 1e-5, NVIDIA H100 8.2e-5 (sub-pixel vertex snapping on
+  // the sphere's grazing rim).
+  EXPECT_LT(worst, 1e-4);
   EXPECT_EQ(silhouetteErrorsBeyondOnePixel(out.depth, ref->depth), 0);
   EXPECT_EQ(silhouetteErrorsBeyondOnePixel(ref->depth, out.depth), 0);
 }

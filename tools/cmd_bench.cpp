@@ -1,13 +1,19 @@
 // vkloc bench render: timing of model renders at 640x480 for ~10k, 100k and 1M triangles.
+// vkloc bench track: per-frame localization time per stage and backend on one sequence.
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <map>
 #include <sstream>
 
 #include "common.hpp"
 #include "vkloc/demo.hpp"
+#include "vkloc/eval.hpp"
+#include "vkloc/localizer.hpp"
+#include "vkloc/se3.hpp"
+#include "vkloc/sequence.hpp"
 
 namespace vkloc::cli {
 namespace {
@@ -130,6 +136,102 @@ void run(const BenchArgs& a) {
   }
 }
 
+struct TrackBenchArgs {
+  std::string sequence;
+  std::vector<std::string> backends{"auto", "cpu", "vulkan"};
+  std::string policy = "when-needed";
+  int runs = 5;
+  size_t max_frames = 0;
+  DeviceArgs device;
+};
+
+/// One backend's timings over every timed pass (ms) and the errors of the first timed pass.
+struct TrackBenchRun {
+  std::string summary;
+  double create_ms = 0, first_frame_ms = 0;
+  std::vector<double> total, reused, render, reference, live, align;
+  std::vector<double> t_err_mm, r_err_deg;
+  size_t lost = 0, rerendered = 0, frames = 0;
+};
+
+double median(const std::vector<double>& v) { return v.empty() ? NAN : stats(v).median; }
+
+void runTrackBench(const TrackBenchArgs& a) {
+  const Sequence seq = take(loadSequence(a.sequence));
+  if (seq.images.empty()) throw Failure{fmt::format("{}: images.txt lists no image", a.sequence)};
+  const PinholeCamera camera = seq.camera.intrinsics;
+  const Model model = loadSequenceModel(seq);
+  const Pose T_init = initialPose(seq, "");
+  const size_t n = a.max_frames > 0 ? std::min(a.max_frames, seq.images.size()) : seq.images.size();
+  std::vector<ImageU8> images;
+  images.reserve(n);
+  for (size_t i = 0; i < n; ++i) images.push_back(take(readImageU8(seq.imagePath(i), 1)));
+  std::map<int64_t, Pose> gt;
+  for (const auto& g : seq.groundtruth) gt[g.t_ns] = g.T_world_camera;
+  auto context = a.device.create();
+  std::printf(
+      "sequence %s: %zu frames %dx%d, model %zu triangles; device %s (%s); policy %s; %d timed passes after "
+      "one warm-up pass, medians over all timed frames\n",
+      seq.name.c_str(), n, camera.width, camera.height, model.triangleCount(), context->device().name.c_str(),
+      context->device().type.c_str(), a.policy.c_str(), a.runs);
+  std::printf("%-7s %8s %8s %8s %8s %8s %8s %9s %9s %9s %6s %6s %9s %9s\n", "backend", "frame", "Hz", "render",
+              "ref.pts", "live", "align", "reused", "create", "1st frame", "lost", "rerend", "mean mm", "mean deg");
+  std::vector<std::pair<std::string, std::string>> summaries;
+  for (const std::string& backend : a.backends) {
+    LocalizerOptions options;
+    options.backend = take(parseLocalizerBackend(backend));
+    options.policy = take(parseRerenderPolicy(a.policy));
+    TrackBenchRun run;
+    const auto t0 = std::chrono::steady_clock::now();
+    auto localizer = take(Localizer::create(model, camera, options, context));
+    run.create_ms = msSince(t0);
+    run.summary = localizer->backendSummary();
+    for (int pass = -1; pass < a.runs; ++pass) {  // pass -1: warm-up (shader JIT, caches).
+      localizer->reset(T_init);
+      for (size_t i = 0; i < n; ++i) {
+        const int64_t t_ns = seq.images[i].t_ns;
+        const LocalizationResult r = take(localizer->localize(t_ns, images[i]));
+        if (pass < 0) {
+          if (i == 0) run.first_frame_ms = r.total_ms;
+          continue;
+        }
+        run.total.push_back(r.total_ms);
+        run.render.push_back(r.render_ms);
+        run.reference.push_back(r.reference_ms);
+        run.live.push_back(r.live_ms);
+        run.align.push_back(r.align_ms);
+        if (!r.reference_rendered) run.reused.push_back(r.total_ms);
+        if (pass != 0) continue;
+        ++run.frames;
+        run.lost += r.state == TrackingState::kLost;
+        run.rerendered += r.reference_rendered;
+        const auto it = gt.find(t_ns);
+        if (it != gt.end() && r.state == TrackingState::kTracking) {
+          run.t_err_mm.push_back((r.T_world_camera.translation() - it->second.translation()).norm() * 1e3);
+          run.r_err_deg.push_back(logSO3(it->second.linear().transpose() * r.T_world_camera.linear()).norm() * 180.0 /
+                                  M_PI);
+        }
+      }
+      std::fprintf(stderr, "\r%s: pass %d of %d", backend.c_str(), pass + 2, a.runs + 1);
+    }
+    std::fprintf(stderr, "\n");
+    const double frame = median(run.total);
+    const auto t_stats = computeErrorStats(run.t_err_mm);
+    const auto r_stats = computeErrorStats(run.r_err_deg);
+    std::printf("%-7s %8.2f %8.1f %8.2f %8.2f %8.2f %8.2f %9.2f %9.1f %9.1f %6zu %6zu %9.3f %9.4f\n", backend.c_str(),
+                frame, 1000.0 / frame, median(run.render), median(run.reference), median(run.live), median(run.align),
+                median(run.reused), run.create_ms, run.first_frame_ms, run.lost, run.rerendered, t_stats.mean,
+                r_stats.mean);
+    std::fflush(stdout);
+    summaries.emplace_back(backend, run.summary);
+  }
+  std::printf(
+      "columns (ms): frame = whole localize(); render / ref.pts = reference render and its 3D edge points (0 when the "
+      "reference is kept); live = pyramid, edges, distance fields; align = Gauss-Newton; reused = whole frames that "
+      "kept their reference; create = Localizer::create; 1st frame = first frame of the warm-up pass (JIT)\n");
+  for (const auto& [backend, summary] : summaries) std::printf("%s: %s\n", backend.c_str(), summary.c_str());
+}
+
 }  // namespace
 
 static void addBenchVerb(CLI::App& app) {
@@ -158,6 +260,23 @@ static void addBenchVerb(CLI::App& app) {
   render->add_option("--lod-pixel-error", args->lod_pixel_error, "Level-of-detail error bound, pixels")
       ->capture_default_str();
   render->callback([args] { run(*args); });
+
+  auto targs = std::make_shared<TrackBenchArgs>();
+  CLI::App* track = bench->add_subcommand("track", "Per-frame localization time per stage and backend on a sequence");
+  targs->device.add(*track);
+  track->add_option("--sequence", targs->sequence, "Sequence folder (vkloc simulate / import)")->required();
+  track->add_option("--backends", targs->backends, "Backends to compare, in one process")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"auto", "cpu", "vulkan"}))
+      ->capture_default_str();
+  track->add_option("--policy", targs->policy, "Re-render policy: every-frame | when-needed")
+      ->check(CLI::IsMember({"every-frame", "when-needed"}))
+      ->capture_default_str();
+  track->add_option("--runs", targs->runs, "Timed passes over the frames")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  track->add_option("--frames", targs->max_frames, "Use only the first N frames (0 = all)")->capture_default_str();
+  track->callback([targs] { runTrackBench(*targs); });
 }
 
 VKLOC_REGISTER_VERB(90, addBenchVerb);

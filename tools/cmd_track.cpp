@@ -71,51 +71,6 @@ double median(std::vector<double> v) {
   return v[n];
 }
 
-Model loadSequenceModel(const Sequence& seq) {
-  const std::string path = seq.modelPath();
-  if (path.empty()) throw Failure{fmt::format("{}: the sequence names no model", seq.directory)};
-  std::array<double, 16> T{};
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) T[r * 4 + c] = seq.T_world_model.matrix()(r, c);
-  }
-  if (isDemoModel(path) && !std::filesystem::exists(path)) {
-    Model m = take(makeDemoModel(path));
-    if (!seq.T_world_model.isApprox(Pose::Identity()) || seq.unit_scale != 1.0) {
-      transformModel(m, T, seq.unit_scale);
-      buildBlocks(m, 32768);
-    }
-    return m;
-  }
-  ModelLoadOptions options;
-  options.T_world_model = T;
-  options.unit_scale = seq.unit_scale;
-  std::vector<std::string> warnings;
-  Model m = take(loadModel(path, options, &warnings));
-  for (const auto& w : warnings) std::fprintf(stderr, "vkloc: warning: %s\n", w.c_str());
-  return m;
-}
-
-Pose initialPose(const Sequence& seq, const std::string& offset) {
-  Pose T;
-  if (seq.initial_T_world_camera) {
-    T = *seq.initial_T_world_camera;
-  } else if (!seq.groundtruth.empty() &&
-             std::llabs(seq.groundtruth.front().t_ns - seq.images.front().t_ns) < 10000000) {
-    T = seq.groundtruth.front().T_world_camera;
-  } else {
-    throw Failure{fmt::format("{}: no initial_T_world_camera in sequence.yaml and no ground truth at the first image",
-                              seq.directory)};
-  }
-  if (!offset.empty()) {
-    const auto v = take(parseNumbers(offset, "--init-offset (dx,dy,dz metres, rx,ry,rz degrees)", 6));
-    Pose dR = Pose::Identity();
-    dR.linear() = expSO3(Eigen::Vector3d(v[3], v[4], v[5]) * M_PI / 180.0);
-    T = T * dR;
-    T.translation() += Eigen::Vector3d(v[0], v[1], v[2]);
-  }
-  return T;
-}
-
 void run(const TrackArgs& a) {
   const auto t_start = std::chrono::steady_clock::now();
   const Sequence seq = take(loadSequence(a.sequence));

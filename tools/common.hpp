@@ -12,6 +12,9 @@
 #include "vkloc/model.hpp"
 #include "vkloc/pose.hpp"
 
+namespace vkloc {
+struct Sequence;
+}
 namespace vkloc::cli {
 
 /// Thrown inside a verb to stop with a one-line message and exit code 1.
@@ -67,6 +70,12 @@ inline double msSince(std::chrono::steady_clock::time_point t0) {
 /// named with `stem` in `dir`. Returns the paths written.
 std::vector<std::string> writeRender(const std::string& dir, const std::string& stem, const RenderOutput& out);
 
+/// The sequence's model (file, or built-in demo placed by T_world_model); throws Failure.
+Model loadSequenceModel(const Sequence& seq);
+/// The sequence's initial pose (sequence.yaml, else ground truth at the first image), moved by
+/// `offset` = "dx,dy,dz,rx,ry,rz" (metres along world axes, degrees about camera axes; "" =
+/// none); throws Failure.
+Pose initialPose(const Sequence& seq, const std::string& offset);
 /// Runs `vkloc track` with these arguments (used by `vkloc demo`); throws Failure on errors.
 void runTrackArguments(const std::vector<std::string>& arguments);
 

@@ -34,7 +34,11 @@ static_assert(static_cast<float>(EDGE_LINE_RADIUS_PX) == kEdgeLineRadiusPx);
 
 namespace {
 
-constexpr uint32_t kGridGroups = 16;      // workgroups of grid-stride dispatches
+constexpr uint32_t kGridGroups = 16;  // workgroups of grid-stride dispatches
+// Workgroups of the image-wide grid-stride passes (histogram, hysteresis) on a GPU: 16 leave
+// most of a discrete GPU idle (H100: hysteresis 2.6 ms, threshold 0.8 ms per frame); on a CPU
+// driver (lavapipe runs workgroups as coroutines) few large groups stay best.
+constexpr uint32_t kWideGridGroups = 512;
 constexpr int kHysteresisBatch = 6;       // hysteresis passes per submission
 constexpr uint32_t kMaxTimestamps = 512;  // per submission
 
@@ -53,6 +57,7 @@ enum Kernel : int {
   kEdgeLines,
   kResiduals,
   kNormalEquations,
+  kScale,
   kKernelCount
 };
 
@@ -64,7 +69,7 @@ constexpr KernelSpec kKernels[kKernelCount] = {
     {"edge_convert.comp", -1}, {"pyramid_down.comp", -1},  {"edge_sobel.comp", -1},      {"edge_hist.comp", -1},
     {"edge_select.comp", -1},  {"edge_nms.comp", -1},      {"edge_hysteresis.comp", -1}, {"jfa_init.comp", -1},
     {"jfa_step.comp", -1},     {"edge_distance.comp", -1}, {"edge_dgrad.comp", -1},      {"edge_lines.comp", -1},
-    {"reduce_edges.comp", 0},  {"reduce_edges.comp", 1}};
+    {"reduce_edges.comp", 0},  {"reduce_edges.comp", 1},   {"edge_scale.comp", -1}};
 
 uint32_t groups(int n, int local) { return static_cast<uint32_t>((n + local - 1) / local); }
 
@@ -115,6 +120,7 @@ struct GpuEdgeStages::Impl {
   // Per-level lists (setLevelPoints): first point and count per level; empty = single list.
   std::vector<uint32_t> level_offsets, level_counts;
   bool have_frame = false;
+  uint32_t wide_groups = kGridGroups;  // workgroups of histogram and hysteresis passes
 
   DeviceHandle<VkDescriptorSetLayout> set_layout;
   DeviceHandle<VkDescriptorPool> descriptor_pool;
@@ -158,6 +164,7 @@ Result<engine::Image> GpuEdgeStages::Impl::storageImage(int w, int h, VkFormat f
 
 Status GpuEdgeStages::Impl::init() {
   device = ctx->device;
+  wide_groups = ctx->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? kGridGroups : kWideGridGroups;
   for (VkFormat f :
        {VK_FORMAT_R32_SFLOAT, VK_FORMAT_R32G32_SFLOAT, VK_FORMAT_R32_UINT, VK_FORMAT_R32G32B32A32_SFLOAT}) {
     VkFormatProperties p{};
@@ -217,8 +224,11 @@ Status GpuEdgeStages::Impl::init() {
     level.candidates = std::move(*candidates);
     levels.push_back(std::move(level));
   }
+  // The live image and the reference points are written by the host every frame: host-visible
+  // buffers take a memcpy where a device-local one takes a staging buffer and a submission
+  // (0.4-0.6 ms each on an H100); the shaders read them once per pass.
   auto input = ctx->createBuffer((static_cast<VkDeviceSize>(camera.width) * camera.height + 3) / 4 * 4,
-                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false);
+                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
   if (!input.ok()) return input.error();
   input8 = std::move(*input);
   auto partial = ctx->createBuffer(kGridGroups * EDGE_REDUCE_VEC4S * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
@@ -383,7 +393,7 @@ Status GpuEdgeStages::Impl::updatePointBindings() {
   if (capacity > point_capacity || !points.buffer) {
     const uint32_t grown = std::max(capacity, point_capacity * 2);
     auto p = ctx->createBuffer(static_cast<VkDeviceSize>(grown) * sizeof(EdgePoint),
-                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, false);
+                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
     if (!p.ok()) return p.error();
     auto r = ctx->createBuffer(static_cast<VkDeviceSize>(grown) * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, true);
     if (!r.ok()) return r.error();
@@ -516,7 +526,9 @@ void GpuEdgeStages::Impl::recordFront(int level) {
       n - 1, static_cast<uint64_t>(options.detector.contrast_percentile * static_cast<double>(n - 1))));
   for (int pass = 0; pass < 3; ++pass) {
     push.step = pass;
-    dispatch(kHist, level, push, kGridGroups);
+    EdgePush hist_push = push;
+    hist_push.group_count = wide_groups;
+    dispatch(kHist, level, hist_push, wide_groups);
     dispatch(kSelect, level, push, 1);
   }
   mark("threshold");
@@ -531,9 +543,10 @@ void GpuEdgeStages::Impl::recordHysteresis(int level, int passes) {
   EdgePush push = levelPush(level);
   vkCmdFillBuffer(cmd, L.control.buffer.get(), offsetof(EdgeControl, changes), 4 * EDGE_MAX_HYSTERESIS_PASSES, 0);
   computeBarrier(cmd);
+  push.group_count = wide_groups;
   for (int i = 0; i < passes; ++i) {
     push.step = i;
-    dispatch(kHysteresis, level, push, kGridGroups);
+    dispatch(kHysteresis, level, push, wide_groups);
   }
   mark("hysteresis");
 }
@@ -806,6 +819,11 @@ Status GpuEdgeAlignment::setPoints(const std::vector<EdgePoint>& points) {
   return stages_->setReference(points);
 }
 
+Result<EdgeEvaluation> GpuEdgeAlignment::evaluate(int level, const Pose& T_camera_ref, double nu, int scale_iterations,
+                                                  double min_sigma_px) {
+  return stages_->evaluate(T_camera_ref, level, nu, scale_iterations, min_sigma_px);
+}
+
 Result<std::vector<float>> GpuEdgeAlignment::residuals(int level, const Pose& T_camera_ref) {
   return stages_->residuals(T_camera_ref, level);
 }
@@ -859,6 +877,49 @@ Result<std::vector<float>> GpuEdgeStages::residuals(const Pose& T_camera_ref, in
   VKLOC_TRY_STATUS(m.submit());
   const auto* r = static_cast<const float*>(m.residuals.mapped);
   return std::vector<float>(r, r + count);
+}
+
+Result<EdgeEvaluation> GpuEdgeStages::evaluate(const Pose& T_camera_ref, int level, double nu, int scale_iterations,
+                                               double min_sigma_px) {
+  Impl& m = *impl_;
+  VKLOC_TRY_STATUS(m.checkTracking(T_camera_ref, level));
+  if (!(nu > 0) || !std::isfinite(nu) || !(min_sigma_px > 0) || !std::isfinite(min_sigma_px) || scale_iterations < 0 ||
+      scale_iterations > 1000) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "GpuEdgeStages::evaluate: need nu > 0, min_sigma_px > 0 and scale_iterations in 0..1000");
+  }
+  m.timings.clear();
+  EdgeEvaluation out;
+  out.sigma_px = min_sigma_px;
+  const uint32_t count = m.level_offsets.empty() ? m.point_count : m.level_counts[level];
+  if (count == 0) {
+    out.eq = EdgeNormalEquations{};
+    return out;
+  }
+  // Residuals -> scale -> normal equations weighted with that scale: one submission.
+  EdgePush push = m.trackingPush(T_camera_ref, level);
+  push.robust[1] = static_cast<float>(nu);
+  push.robust[2] = static_cast<float>(min_sigma_px);
+  push.step = scale_iterations;
+  VKLOC_TRY_STATUS(m.begin());
+  m.dispatch(kResiduals, level, push, kGridGroups);
+  m.mark("residuals");
+  m.dispatch(kScale, level, push, 1);
+  m.mark("scale");
+  push.robust[3] = 1.0f;
+  m.dispatch(kNormalEquations, level, push, kGridGroups);
+  m.mark("normal equations");
+  VKLOC_TRY_STATUS(m.submit());
+  const auto* r = static_cast<const float*>(m.residuals.mapped);
+  out.residuals.assign(r, r + count);
+  out.sigma_px = static_cast<const EdgeControl*>(m.levels[level].control.mapped)->sigma_px;
+  EdgeNormalEquations eq{};
+  const auto* partial = static_cast<const float*>(m.partials.mapped);
+  for (uint32_t g = 0; g < kGridGroups; ++g) {
+    for (int i = 0; i < kEdgeNormalEquationSize; ++i) eq[i] += partial[g * EDGE_REDUCE_VEC4S * 4 + i];
+  }
+  out.eq = eq;
+  return out;
 }
 
 Result<EdgeNormalEquations> GpuEdgeStages::accumulate(const Pose& T_camera_ref, int level, double sigma_px, double nu) {

@@ -57,6 +57,12 @@ Status validateOptions(const LocalizerOptions& o) {
   if (o.init_refinements < 0 || o.init_refinements > 100) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: init_refinements must be in 0..100");
   }
+  if (o.init_search_steps < 0 || o.init_search_steps > 10 || !finiteIn(o.init_search_deg, 0.0, 90.0) ||
+      !finiteIn(o.init_confident_inlier_ratio, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "Localizer: need init_search_steps in 0..10, init_search_deg in 0..90 and "
+                     "init_confident_inlier_ratio in 0..1");
+  }
   if (r.max_frames < 1) return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.max_frames must be >= 1");
   VKLOC_TRY_STATUS(validateRenderSettings(o.render));
   VKLOC_TRY_STATUS(validateReferenceEdgeOptions(o.reference));
@@ -436,8 +442,33 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
     if (!retry.ok()) return retry.error();
     track = std::move(retry);
   }
-  // Initialization (no frame tracked since reset): a guess far off converges in steps, each
-  // rendering a fresh reference at the last estimate.
+  // Initialization (no frame tracked since reset) with a result that is not clearly right: the
+  // alignment also starts from the guess turned about the camera's x and y axes on a grid
+  // (init_search_deg steps); the best result wins (tracking over lost, then the inlier ratio).
+  if (!m.tracked_since_reset && m.options.init_search_steps > 0 &&
+      !(track->state == TrackingState::kTracking &&
+        track->quality.inlier_ratio >= m.options.init_confident_inlier_ratio)) {
+    const int n = m.options.init_search_steps;
+    const double step_rad = m.options.init_search_deg * M_PI / 180.0;
+    auto better = [](const TrackResult& a, const TrackResult& b) {
+      const bool a_tracking = a.state == TrackingState::kTracking;
+      const bool b_tracking = b.state == TrackingState::kTracking;
+      if (a_tracking != b_tracking) return a_tracking;
+      return a.quality.inlier_ratio > b.quality.inlier_ratio;
+    };
+    for (int i = -n; i <= n; ++i) {
+      for (int j = -n; j <= n; ++j) {
+        if (i == 0 && j == 0) continue;
+        Pose start = guess;
+        start.linear() = guess.linear() * expSO3(Eigen::Vector3d(i * step_rad, j * step_rad, 0.0));
+        Result<TrackResult> candidate = m.align(gray, start, m.live_on_gpu, out, cpu_live);
+        if (!candidate.ok()) return candidate.error();
+        if (better(*candidate, *track)) track = std::move(candidate);
+      }
+    }
+  }
+  // Initialization: a guess far off converges in steps, each rendering a fresh reference at the
+  // last estimate.
   for (int step = 0; step < m.options.init_refinements && !m.tracked_since_reset &&
                      track->state == TrackingState::kLost && isValidPose(track->T_world_camera);
        ++step) {

@@ -7,9 +7,13 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace vkloc {
 namespace {
+
+/// Lower bound of the t-distribution scale, pixels (default of estimateTDistributionScale).
+constexpr double kMinSigmaPx = 0.05;
 
 bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
 
@@ -199,6 +203,8 @@ Status validateEdgeTrackerOptions(const EdgeTrackerOptions& o) {
   }
   if (!finiteIn(o.min_step, 0.0, 1.0))
     return makeError(ErrorCode::kInvalidArgument, "edge tracker: min_step must be in 0..1");
+  if (!finiteIn(o.min_cost_decrease, 0.0, 1.0))
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: min_cost_decrease must be in 0..1");
   if (!finiteIn(o.initial_damping, 1e-12, 1e6) || !finiteIn(o.max_damping, o.initial_damping, 1e12)) {
     return makeError(ErrorCode::kInvalidArgument, "edge tracker: need 1e-12 <= initial_damping <= max_damping <= 1e12");
   }
@@ -240,6 +246,16 @@ int CpuEdgeAlignment::levelCount() const { return static_cast<int>(live_->levels
 PinholeCamera CpuEdgeAlignment::levelCamera(int level) const { return live_->levels[level].camera; }
 
 float CpuEdgeAlignment::truncationPx(int level) const { return live_->levels[level].field.truncation_px; }
+
+Result<EdgeEvaluation> EdgeAlignmentBackend::evaluate(int level, const Pose& T_camera_ref, double nu,
+                                                      int scale_iterations, double min_sigma_px) {
+  auto r = residuals(level, T_camera_ref);
+  if (!r.ok()) return r.error();
+  EdgeEvaluation out;
+  out.residuals = std::move(r).value();
+  out.sigma_px = estimateTDistributionScale(out.residuals, nu, scale_iterations, min_sigma_px);
+  return out;
+}
 
 Status CpuEdgeAlignment::setPoints(const std::vector<EdgePoint>& points) {
   points_ = points;
@@ -330,15 +346,19 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
         if (points.size() < 6) continue;
         VKLOC_TRY_STATUS(usePoints(points));
         const double trunc = backend.truncationPx(level_index);
-        auto first = backend.residuals(level_index, T);
+        // Residuals, scale and (GPU) normal equations at T; kept through rejected steps (T, the
+        // residuals and so the scale do not change then: only the damping does).
+        auto first = backend.evaluate(level_index, T, options.nu, options.scale_iterations, kMinSigmaPx);
         if (!first.ok()) return first.error();
-        std::vector<float> residuals = std::move(first).value();
+        EdgeEvaluation at_T = std::move(first).value();
         double lambda = 0;
         for (int it = 0; it < options.max_iterations; ++it) {
-          const double sigma = estimateTDistributionScale(residuals, options.nu, options.scale_iterations);
-          auto accumulated = backend.accumulate(level_index, T, sigma, options.nu);
-          if (!accumulated.ok()) return accumulated.error();
-          const EdgeNormalEquations& eq = *accumulated;
+          if (!at_T.eq) {
+            auto accumulated = backend.accumulate(level_index, T, at_T.sigma_px, options.nu);
+            if (!accumulated.ok()) return accumulated.error();
+            at_T.eq = *accumulated;
+          }
+          const EdgeNormalEquations& eq = *at_T.eq;
           if (eq[kEdgeNormalCountIndex] < 6) break;
           Matrix6d H;
           Vector6d g;
@@ -363,16 +383,17 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
           if (!solved) break;
           ++iterations;
           const Pose T_new = orthonormalized(applyLeftIncrement(T, delta));
-          auto evaluated = backend.residuals(level_index, T_new);
+          auto evaluated = backend.evaluate(level_index, T_new, options.nu, options.scale_iterations, kMinSigmaPx);
           if (!evaluated.ok()) return evaluated.error();
-          std::vector<float> residuals_new = std::move(evaluated).value();
-          const double cost_old = robustCost(residuals, sigma, options.nu, trunc);
-          const double cost_new = robustCost(residuals_new, sigma, options.nu, trunc);
+          // Both costs with the scale at T (the robust cost of eq. 13 for one sigma).
+          const double cost_old = robustCost(at_T.residuals, at_T.sigma_px, options.nu, trunc);
+          const double cost_new = robustCost(evaluated->residuals, at_T.sigma_px, options.nu, trunc);
           if (cost_new <= cost_old) {
             T = T_new;
-            residuals = std::move(residuals_new);
+            at_T = std::move(evaluated).value();
             lambda = lambda > options.initial_damping ? lambda * 0.1 : 0.0;
-            if (delta.norm() < options.min_step) break;
+            // Converged: a step below min_step, or a cost that no longer falls by min_cost_decrease.
+            if (delta.norm() < options.min_step || cost_old - cost_new <= options.min_cost_decrease * cost_old) break;
           } else {
             lambda = lambda > 0 ? lambda * 10 : options.initial_damping;
             if (lambda > options.max_damping || delta.norm() < options.min_step) break;
@@ -482,7 +503,7 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
       q.chance_inlier_ratio < 1.0 ? (q.inlier_ratio - q.chance_inlier_ratio) / (1.0 - q.chance_inlier_ratio) : 0.0;
   q.visible_ratio = static_cast<double>(q.points_in_image) / static_cast<double>(points.size());
   q.mean_residual_px = inliers > 0 ? inlier_sum / inliers : 0.0;
-  q.scale_px = estimateTDistributionScale(residuals, options.nu, options.scale_iterations);
+  q.scale_px = estimateTDistributionScale(residuals, options.nu, options.scale_iterations, kMinSigmaPx);
   auto final_eq = backend.accumulate(finest_index, T, q.scale_px, options.nu);
   if (!final_eq.ok()) return final_eq.error();
   const EdgeNormalEquations& eq = *final_eq;

@@ -62,7 +62,7 @@ struct EdgePush {
   VKLOC_VEC4(pose_row1);
   VKLOC_VEC4(pose_row2);
   VKLOC_VEC4(intrinsics);  // fx, fy, cx, cy of this level, pixels.
-  VKLOC_VEC4(robust);      // sigma (pixels), nu, unused, unused.
+  VKLOC_VEC4(robust);      // sigma (pixels), nu, minimum sigma (pixels), 1 = sigma from CONTROL.sigma_px.
 };
 
 // Per-level control block written by the shaders.
@@ -73,7 +73,7 @@ struct EdgeControl {
   VKLOC_FLOAT(high);            // High threshold.
   VKLOC_FLOAT(low);             // Low threshold.
   VKLOC_UINT(candidate_count);  // Weak candidates appended by NMS.
-  VKLOC_UINT(pad0);
+  VKLOC_FLOAT(sigma_px);        // t-distribution scale of the last residuals (edge_scale.comp), pixels.
   VKLOC_UINT(pad1);
   VKLOC_UINT(changes[EDGE_MAX_HYSTERESIS_PASSES]);  // Pixels promoted per hysteresis pass slot.
 };

@@ -78,6 +78,12 @@ class GpuEdgeStages {
   /// sigma_px <= 0 or nu <= 0.
   Result<EdgeNormalEquations> accumulate(const Pose& T_camera_ref, int level, double sigma_px, double nu);
 
+  /// residuals(), the t-distribution scale of those residuals (estimateTDistributionScale with
+  /// nu, scale_iterations, min_sigma_px; float on the device) and the normal equations weighted
+  /// with it, in one submission. kInvalidArgument as accumulate.
+  Result<EdgeEvaluation> evaluate(const Pose& T_camera_ref, int level, double nu, int scale_iterations,
+                                  double min_sigma_px);
+
   /// Uploads one point list per pyramid level (level k: edgePointsForLevel(reference, k)) in
   /// one buffer; residuals/accumulate on level k then use level k's list, so a tracker switches
   /// levels without uploading again. Replaces the previous reference (as setReference does).
@@ -120,6 +126,8 @@ class GpuEdgeAlignment final : public EdgeAlignmentBackend {
   Status setPoints(const std::vector<EdgePoint>& points) override;
   Result<std::vector<float>> residuals(int level, const Pose& T_camera_ref) override;
   Result<EdgeNormalEquations> accumulate(int level, const Pose& T_camera_ref, double sigma_px, double nu) override;
+  Result<EdgeEvaluation> evaluate(int level, const Pose& T_camera_ref, double nu, int scale_iterations,
+                                  double min_sigma_px) override;
   Result<double> nearEdgeFraction(int level, double threshold_px) override;
 
  private:
