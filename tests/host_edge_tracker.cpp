@@ -358,6 +358,7 @@ TEST(EdgeTracker, DISABLED_StageTimings640x480) {
   using Clock = std::chrono::steady_clock;
   auto ms = [](Clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); };
   const int runs = 20;
+  double t_live_plain = 0;
   double t_pyr = 0, t_edges = 0, t_dt = 0, t_live = 0, t_ref = 0, t_track = 0, t_resid = 0, t_normal = 0;
   int iterations = 0;
   for (int k = 0; k < runs; ++k) {
@@ -372,6 +373,13 @@ TEST(EdgeTracker, DISABLED_StageTimings640x480) {
     auto t3 = Clock::now();
     auto live = buildLiveFrame(live_view.gray, cam);
     auto t4 = Clock::now();
+    {
+      LiveFrameOptions no_lines;
+      no_lines.subpixel_edges = false;
+      auto tl = Clock::now();
+      auto plain = buildLiveFrame(live_view.gray, cam, no_lines);
+      t_live_plain += ms(Clock::now() - tl);
+    }
     auto ref = buildEdgeReference(ref_view, cam, T_ref);
     auto t5 = Clock::now();
     auto r = trackFrame(*ref, *live, T_ref);
@@ -395,10 +403,11 @@ TEST(EdgeTracker, DISABLED_StageTimings640x480) {
   }
   std::printf(
       "640x480 mean of %d runs (ms): gray->float + 2 pyramid halvings %.2f | edges level 0 %.2f | "
-      "distance field + gradient level 0 %.2f | buildLiveFrame (3 levels) %.2f | buildEdgeReference (3 levels) "
+      "distance field + gradient level 0 %.2f | buildLiveFrame (3 levels) %.2f, without sub-pixel edge lines "
+      "%.2f | buildEdgeReference (3 levels) "
       "%.2f | trackFrame %.2f (%d GN iterations) | residuals level 0 %.3f | normal equations level 0 %.3f\n",
-      runs, t_pyr / runs, t_edges / runs, t_dt / runs, t_live / runs, t_ref / runs, t_track / runs, iterations,
-      t_resid / runs, t_normal / runs);
+      runs, t_pyr / runs, t_edges / runs, t_dt / runs, t_live / runs, t_live_plain / runs, t_ref / runs, t_track / runs,
+      iterations, t_resid / runs, t_normal / runs);
 }
 
 /// Backend that forwards to CpuEdgeAlignment, counts calls and can fail on request.

@@ -141,6 +141,7 @@ struct Localizer::Impl {
   double last_inlier_ratio = 1.0;
   bool last_lost = false;
   bool gpu_frame_ready = false;
+  LiveFrame cpu_live;  // CPU live stages of the current image; its buffers are reused per frame
   bool tracked_since_reset =
       false;  // a frame was tracked since create/reset  // the current image is already processed on the device
 
@@ -261,7 +262,7 @@ struct Localizer::Impl {
 
   /// Live stages + alignment on the chosen backend.
   Result<TrackResult> align(const ImageU8& gray, const Pose& guess, bool gpu, LocalizationResult& out,
-                            std::optional<LiveFrame>& cpu_live) {
+                            bool& cpu_live_ready) {
     if (reference->points.size() < 6) {
       // Nothing of the model is seen from the guess: a lost frame, not an error.
       TrackResult lost;
@@ -284,17 +285,18 @@ struct Localizer::Impl {
       return r;
     }
     auto t0 = Clock::now();
-    if (!cpu_live) {
+    if (!cpu_live_ready) {
+      // Built into the previous frame's buffers: a fresh LiveFrame per frame costs ~8 MB of
+      // new pages at 640x480 (distance, gradient and edge lines of every level).
       LiveFrameOptions live = options.live;
       live.keep_intermediate = false;
-      Result<LiveFrame> frame = buildLiveFrame(gray, camera, live);
-      if (!frame.ok()) return frame.error();
-      cpu_live = std::move(*frame);
+      VKLOC_TRY_STATUS(buildLiveFrame(gray, camera, live, cpu_live));
+      cpu_live_ready = true;
       out.live_ms += msSince(t0);
     }
     t0 = Clock::now();
     const std::optional<EdgeReference> slow = slowPoints(guess);
-    Result<TrackResult> r = trackFrame(slow ? *slow : *reference, *cpu_live, guess, options.tracker);
+    Result<TrackResult> r = trackFrame(slow ? *slow : *reference, cpu_live, guess, options.tracker);
     out.align_ms += msSince(t0);
     return r;
   }
@@ -307,9 +309,9 @@ struct Localizer::Impl {
       // Twice each: the first run includes shader compilation / allocation.
       for (int run = 0; run < 2; ++run) {
         LocalizationResult scratch;
-        std::optional<LiveFrame> live;
+        bool live_ready = false;
         gpu_frame_ready = false;
-        Result<TrackResult> r = align(gray, guess, gpu == 1, scratch, live);
+        Result<TrackResult> r = align(gray, guess, gpu == 1, scratch, live_ready);
         if (!r.ok()) return r.error();
         best[gpu] = scratch.live_ms + scratch.align_ms;
       }
@@ -432,13 +434,13 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   if (m.needsReference(guess)) VKLOC_TRY_STATUS(m.makeReference(guess, out));
   if (m.calibration_pending) VKLOC_TRY_STATUS(m.calibrate(gray, guess));
 
-  std::optional<LiveFrame> cpu_live;
+  bool cpu_live_ready = false;  // the CPU live stages ran on this image (m.cpu_live)
   m.gpu_frame_ready = false;
-  Result<TrackResult> track = m.align(gray, guess, m.live_on_gpu, out, cpu_live);
+  Result<TrackResult> track = m.align(gray, guess, m.live_on_gpu, out, cpu_live_ready);
   if (!track.ok()) return track.error();
   if (track->state == TrackingState::kLost && !out.reference_rendered && m.options.retry_lost_with_fresh_reference) {
     VKLOC_TRY_STATUS(m.makeReference(guess, out));
-    Result<TrackResult> retry = m.align(gray, guess, m.live_on_gpu, out, cpu_live);
+    Result<TrackResult> retry = m.align(gray, guess, m.live_on_gpu, out, cpu_live_ready);
     if (!retry.ok()) return retry.error();
     track = std::move(retry);
   }
@@ -461,7 +463,7 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
         if (i == 0 && j == 0) continue;
         Pose start = guess;
         start.linear() = guess.linear() * expSO3(Eigen::Vector3d(i * step_rad, j * step_rad, 0.0));
-        Result<TrackResult> candidate = m.align(gray, start, m.live_on_gpu, out, cpu_live);
+        Result<TrackResult> candidate = m.align(gray, start, m.live_on_gpu, out, cpu_live_ready);
         if (!candidate.ok()) return candidate.error();
         if (better(*candidate, *track)) track = std::move(candidate);
       }
@@ -473,7 +475,7 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
                      track->state == TrackingState::kLost && isValidPose(track->T_world_camera);
        ++step) {
     VKLOC_TRY_STATUS(m.makeReference(track->T_world_camera, out));
-    Result<TrackResult> again = m.align(gray, track->T_world_camera, m.live_on_gpu, out, cpu_live);
+    Result<TrackResult> again = m.align(gray, track->T_world_camera, m.live_on_gpu, out, cpu_live_ready);
     if (!again.ok()) return again.error();
     track = std::move(again);
   }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -408,50 +409,100 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
                      fmt::format("buildLiveFrame: image is {}x{}x{}, camera expects {}x{} single-channel", gray.width,
                                  gray.height, gray.channels, camera.width, camera.height));
   }
-  // Working buffers kept per thread: a frame at a time allocates nothing once warm.
-  struct Scratch {
-    std::vector<ImageF32> gray;
+  // The gray pyramid first (cheap), then the levels in parallel (level 0 on one core, the
+  // coarser ones on another): each level's edges, distance field and edge lines depend only on
+  // its own gray image. Working buffers are kept per thread: once warm nothing is allocated.
+  thread_local std::vector<ImageF32> pyramid;
+  int built = 0;
+  for (int level = 0; level < options.levels; ++level) {
+    if (static_cast<int>(pyramid.size()) <= level) pyramid.resize(static_cast<size_t>(level) + 1);
+    ImageF32& level_gray = pyramid[static_cast<size_t>(level)];
+    if (level == 0) {
+      resetImage(level_gray, gray.width, gray.height, 1, 0.0f);
+      for (size_t i = 0; i < gray.data.size(); ++i) level_gray.data[i] = gray.data[i];
+    } else {
+      const ImageF32& finer = pyramid[static_cast<size_t>(level) - 1];
+      if (finer.width < 16 || finer.height < 16) break;
+      level_gray = downsampleHalf(finer);
+    }
+    built = level + 1;
+  }
+  frame.levels.resize(static_cast<size_t>(built));
+  // Named by reference: inside the lambda below `pyramid` would be the worker thread's own.
+  const std::vector<ImageF32>& grays = pyramid;
+  // Per level: edges (with their gradients), then the distance field and the edge lines, which
+  // both read only the edges. Two parallel rounds over tasks ordered by cost: round 1 the edges
+  // of level 0 | of the coarser levels; round 2 the distance field of level 0 | level 0's edge
+  // lines and the coarser levels' fields and lines.
+  struct LevelScratch {
     EdgeGradients gradients;
     ImageU8 edges;
     cv::Mat inverted;
     std::vector<float> best;
   };
-  thread_local Scratch scratch;
-  int built = 0;
-  for (int level = 0; level < options.levels; ++level) {
-    if (static_cast<int>(scratch.gray.size()) <= level) scratch.gray.resize(static_cast<size_t>(level) + 1);
-    ImageF32& level_gray = scratch.gray[static_cast<size_t>(level)];
-    if (level == 0) {
-      resetImage(level_gray, gray.width, gray.height, 1, 0.0f);
-      for (size_t i = 0; i < gray.data.size(); ++i) level_gray.data[i] = gray.data[i];
-    } else {
-      const ImageF32& finer = scratch.gray[static_cast<size_t>(level) - 1];
-      if (finer.width < 16 || finer.height < 16) break;
-      level_gray = downsampleHalf(finer);
-    }
-    if (static_cast<int>(frame.levels.size()) <= level) frame.levels.resize(static_cast<size_t>(level) + 1);
+  thread_local std::vector<LevelScratch> level_scratch;
+  if (level_scratch.size() < static_cast<size_t>(built)) level_scratch.resize(static_cast<size_t>(built));
+  std::vector<LevelScratch>& scratch = level_scratch;  // the calling thread's, shared with the workers
+  std::vector<Status> status(static_cast<size_t>(2 * built), Status::success());
+  auto edgesOf = [&](int level) {
     LiveLevel& out = frame.levels[static_cast<size_t>(level)];
     out.camera = pyramidCamera(camera, level);
-    ImageU8& edges = options.keep_intermediate ? out.edges : scratch.edges;
-    VKLOC_TRY_STATUS(detectEdgesImpl(level_gray, options.detector, scratch.gradients, edges));
-    VKLOC_TRY_STATUS(computeDistanceFieldInto(edges, options.truncation_px, out.field, scratch.inverted));
+    LevelScratch& sc = scratch[static_cast<size_t>(level)];
+    status[static_cast<size_t>(level)] =
+        detectEdgesImpl(grays[static_cast<size_t>(level)], options.detector, sc.gradients, sc.edges);
+  };
+  auto fieldOf = [&](int level) {
+    LevelScratch& sc = scratch[static_cast<size_t>(level)];
+    status[static_cast<size_t>(built + level)] = computeDistanceFieldInto(
+        sc.edges, options.truncation_px, frame.levels[static_cast<size_t>(level)].field, sc.inverted);
+  };
+  auto linesOf = [&](int level) {
+    LevelScratch& sc = scratch[static_cast<size_t>(level)];
+    LiveLevel& out = frame.levels[static_cast<size_t>(level)];
     if (options.subpixel_edges) {
-      computeEdgeLines(edges, scratch.gradients, out.edge_lines, scratch.best);
+      computeEdgeLines(sc.edges, sc.gradients, out.edge_lines, sc.best);
     } else {
       out.edge_lines = ImageF32{};
     }
+  };
+  auto twoWays = [&](const std::function<void()>& a, const std::function<void()>& b) {
+    cv::parallel_for_(
+        cv::Range(0, 2),
+        [&](const cv::Range& r) {
+          for (int i = r.start; i < r.end; ++i) (i == 0 ? a : b)();
+        },
+        2);
+  };
+  twoWays([&] { edgesOf(0); },
+          [&] {
+            for (int level = 1; level < built; ++level) edgesOf(level);
+          });
+  for (const Status& st : status) VKLOC_TRY_STATUS(st);
+  twoWays([&] { fieldOf(0); },
+          [&] {
+            linesOf(0);
+            for (int level = 1; level < built; ++level) {
+              if (status[static_cast<size_t>(level)].ok()) {
+                fieldOf(level);
+                linesOf(level);
+              }
+            }
+          });
+  for (int level = 0; level < built; ++level) {
+    LiveLevel& out = frame.levels[static_cast<size_t>(level)];
     if (options.keep_intermediate) {
-      out.gray.width = level_gray.width;
-      out.gray.height = level_gray.height;
+      const ImageF32& g = grays[static_cast<size_t>(level)];
+      out.gray.width = g.width;
+      out.gray.height = g.height;
       out.gray.channels = 1;
-      out.gray.data.assign(level_gray.data.begin(), level_gray.data.end());
+      out.gray.data.assign(g.data.begin(), g.data.end());
+      out.edges = scratch[static_cast<size_t>(level)].edges;
     } else {
       out.gray = ImageF32{};
       out.edges = ImageU8{};
     }
-    built = level + 1;
   }
-  frame.levels.resize(static_cast<size_t>(built));
+  for (const Status& st : status) VKLOC_TRY_STATUS(st);
   return Status::success();
 }
 
