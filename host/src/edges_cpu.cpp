@@ -482,10 +482,8 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
           [&] {
             linesOf(0);
             for (int level = 1; level < built; ++level) {
-              if (status[static_cast<size_t>(level)].ok()) {
-                fieldOf(level);
-                linesOf(level);
-              }
+              fieldOf(level);
+              linesOf(level);
             }
           });
   for (int level = 0; level < built; ++level) {
