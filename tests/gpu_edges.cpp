@@ -368,6 +368,46 @@ TEST_F(GpuEdges, SubpixelEdgeLinesGiveTheDistanceToATiltedStep) {
   EXPECT_GT(worst_coarse, 0.2);
 }
 
+TEST_F(GpuEdges, SparseEdgesGiveExactDistancesUpToTheTruncation) {
+  // One bright square and one bright dot on black: most pixels lie 5-20 px from the nearest
+  // edge, so the jump-flooding schedule (steps 16, 8, 4, 2, 1, 2, 1 for 20 px) must carry seeds
+  // the whole truncation distance; the edge lines pass skips pixels beyond its radius.
+  ImageU8 gray(320, 240, 1, 0);
+  for (int y = 100; y < 140; ++y) {
+    for (int x = 140; x < 180; ++x) gray.at(x, y) = 200;
+  }
+  for (int y = 30; y < 33; ++y) {
+    for (int x = 40; x < 43; ++x) gray.at(x, y) = 200;
+  }
+  LiveFrameOptions options;
+  options.levels = 1;
+  auto stages = makeStages(qvga(), options);
+  ASSERT_TRUE(stages);
+  ASSERT_TRUE(stages->processLiveImage(gray).ok());
+  auto gpu = stages->readLiveFrame();
+  ASSERT_TRUE(gpu.ok());
+  const LiveLevel& g = gpu->levels[0];
+  auto exact = computeDistanceField(g.edges, options.truncation_px);
+  ASSERT_TRUE(exact.ok());
+  int far = 0, off = 0;
+  for (size_t i = 0; i < exact->distance.data.size(); ++i) {
+    const float e = exact->distance.data[i];
+    far += e > 10.0f && e < options.truncation_px;
+    off += std::abs(g.field.distance.data[i] - e) > 1e-4f;
+  }
+  EXPECT_GT(far, 3000);
+  EXPECT_EQ(off, 0);
+  auto cpu = buildLiveFrame(gray, qvga(), options);
+  ASSERT_TRUE(cpu.ok());
+  ASSERT_EQ(cpu->levels[0].edge_lines.data.size(), g.edge_lines.data.size());
+  double worst_line = 0;
+  for (size_t i = 0; i < g.edge_lines.data.size(); ++i) {
+    worst_line =
+        std::max(worst_line, std::abs(static_cast<double>(g.edge_lines.data[i]) - cpu->levels[0].edge_lines.data[i]));
+  }
+  EXPECT_LE(worst_line, 1e-3);
+}
+
 TEST_F(GpuEdges, RejectsBadInput) {
   auto stages = makeStages(qvga());
   ASSERT_TRUE(stages);

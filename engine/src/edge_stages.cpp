@@ -556,8 +556,9 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
   EdgePush push = levelPush(level);
   const uint32_t gx = groups(push.width, 16), gy = groups(push.height, 16);
   dispatch(kJfaInit, level, push, gx, gy);
-  // JFA+2 from the step that reaches the truncation distance: steps S, S/2, .., 1, then 2, 1.
-  const uint32_t start = std::min(nextPowerOfTwo(std::ceil(options.truncation_px)),
+  // JFA+2 from the smallest step S whose passes reach the truncation distance (S, S/2, .., 1
+  // move a seed up to 2S - 1 pixels along each axis: S = 16 for 20 px), then 2, 1.
+  const uint32_t start = std::min(nextPowerOfTwo(std::ceil((options.truncation_px + 1.0) / 2.0)),
                                   std::max<uint32_t>(1, nextPowerOfTwo(std::max(push.width, push.height)) / 2));
   std::vector<int> steps;
   for (uint32_t s = start; s >= 1; s /= 2) steps.push_back(static_cast<int>(s));

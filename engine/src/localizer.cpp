@@ -333,7 +333,14 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
   VKLOC_TRY_STATUS(validateModel(model));
   auto impl = std::make_unique<Impl>();
   impl->options = options;
-  impl->options.reference.levels = options.live.levels;
+  // Pyramid levels nobody reads are not built: the tracker starts at coarsest_level and the
+  // far-points-first hypothesis at far_first_coarsest_level (-1: the live frame's coarsest).
+  const EdgeTrackerOptions& t = options.tracker;
+  if (t.coarsest_level >= 0 && (t.far_first_depth_quantile <= 0 || t.far_first_coarsest_level >= 0)) {
+    const int deepest = std::max(t.coarsest_level, t.far_first_depth_quantile > 0 ? t.far_first_coarsest_level : 0);
+    impl->options.live.levels = std::min(options.live.levels, std::max(deepest, t.finest_level) + 1);
+  }
+  impl->options.reference.levels = impl->options.live.levels;
   impl->camera = camera;
   impl->context = context;
   if (context) {

@@ -201,6 +201,9 @@ Status validateEdgeTrackerOptions(const EdgeTrackerOptions& o) {
   if (o.far_first_coarsest_level < -1) {
     return makeError(ErrorCode::kInvalidArgument, "edge tracker: far_first_coarsest_level must be >= -1");
   }
+  if (!(o.far_first_skip_inlier_ratio >= 0) || std::isnan(o.far_first_skip_inlier_ratio)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge tracker: far_first_skip_inlier_ratio must be >= 0");
+  }
   if (!finiteIn(o.min_step, 0.0, 1.0))
     return makeError(ErrorCode::kInvalidArgument, "edge tracker: min_step must be in 0..1");
   if (!finiteIn(o.min_cost_decrease, 0.0, 1.0))
@@ -404,7 +407,24 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
     return Status::success();
   };
   VKLOC_TRY_STATUS(align(false, coarsest));
-  if (options.far_first_depth_quantile > 0) {
+  const std::vector<EdgePoint>& finest_points = pointsFor(options.finest_level);
+  auto inlierCount = [&](const Pose& T_cr) -> Result<int> {
+    VKLOC_TRY_STATUS(usePoints(finest_points));
+    auto r = backend.residuals(options.finest_level, T_cr);
+    if (!r.ok()) return r.error();
+    int n = 0;
+    for (float v : *r) n += v >= 0 && v < options.inlier_threshold_px;
+    return n;
+  };
+  std::optional<int> plain_inliers;
+  if (options.far_first_depth_quantile > 0 && options.far_first_skip_inlier_ratio <= 1.0) {
+    auto n = inlierCount(T);
+    if (!n.ok()) return n.error();
+    plain_inliers = *n;
+  }
+  const bool plain_confident = plain_inliers && *plain_inliers >= options.far_first_skip_inlier_ratio *
+                                                                      static_cast<double>(finest_points.size());
+  if (options.far_first_depth_quantile > 0 && !plain_confident) {
     // Second hypothesis from the same guess, far points first; the pose whose finest-level
     // inlier count is higher wins.
     for (int level_index = 0; level_index < levels; ++level_index) {
@@ -417,17 +437,11 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
             ? coarsest
             : std::max(options.finest_level, std::min(options.far_first_coarsest_level, levels - 1));
     VKLOC_TRY_STATUS(align(true, far_coarsest));
-    const std::vector<EdgePoint>& finest_points = pointsFor(options.finest_level);
-    VKLOC_TRY_STATUS(usePoints(finest_points));
-    auto inlierCount = [&](const Pose& T_cr) -> Result<int> {
-      auto r = backend.residuals(options.finest_level, T_cr);
-      if (!r.ok()) return r.error();
-      int n = 0;
-      for (float v : *r) n += v >= 0 && v < options.inlier_threshold_px;
-      return n;
-    };
-    auto plain_inliers = inlierCount(T_plain);
-    if (!plain_inliers.ok()) return plain_inliers.error();
+    if (!plain_inliers) {
+      auto n = inlierCount(T_plain);
+      if (!n.ok()) return n.error();
+      plain_inliers = *n;
+    }
     auto far_inliers = inlierCount(T);
     if (!far_inliers.ok()) return far_inliers.error();
     if (*far_inliers <= *plain_inliers) T = T_plain;

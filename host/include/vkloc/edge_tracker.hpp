@@ -109,6 +109,10 @@ struct EdgeTrackerOptions {
   /// Coarsest level of the far-points-first hypothesis; -1 = coarsest_level. Default 1 (see
   /// far_first_depth_quantile; 172 mm instead of 3 mm on that frame when it starts at level 0).
   int far_first_coarsest_level = 1;
+  /// Skip the far-points-first hypothesis when the plain pass already has at least this
+  /// fraction of all finest-level points as inliers (> 1 = never skip). Castle-simu (right
+  /// poses 0.88-0.95 of the points in view) then aligns once per frame.
+  double far_first_skip_inlier_ratio = 0.85;
   /// Stop a level when |delta| (m and rad combined) falls below this (10 um / 10 urad: 0.005 px
   /// at 1.4 m with fx = 700).
   double min_step = 1e-5;
