@@ -876,24 +876,37 @@ Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const Pinhole
   EdgeReference ref;
   ref.camera = camera;
   ref.T_world_ref = T_world_ref;
-  ReferenceLevel level{toFloat(view.gray), view.depth, view.normals};
-  for (int k = 0; k < options.levels; ++k) {
-    if (k > 0) {
-      if (level.depth.width < 16 || level.depth.height < 16) break;
-      level = downsampleReference(level);
-    }
-    const PinholeCamera level_camera = pyramidCamera(camera, k);
-    ImageF32 offsets;
-    auto flags = detectReferenceEdgesImpl(level, options, &offsets);
-    if (!flags.ok()) return flags.error();
-    std::vector<EdgePoint> points = subsampleEdgePoints(
-        backProjectEdgesImpl(*flags, level.depth, level_camera, options, &offsets), level_camera, options);
-    if (k == 0) {
-      ref.points = std::move(points);
-    } else {
-      ref.coarse_points.push_back(std::move(points));
-    }
+  // The pyramid of render targets first, then the levels in parallel (each reads only its own).
+  std::vector<ReferenceLevel> levels;
+  levels.push_back(ReferenceLevel{toFloat(view.gray), view.depth, view.normals});
+  while (static_cast<int>(levels.size()) < options.levels) {
+    const ReferenceLevel& finer = levels.back();
+    if (finer.depth.width < 16 || finer.depth.height < 16) break;
+    levels.push_back(downsampleReference(finer));
   }
+  const int n = static_cast<int>(levels.size());
+  std::vector<std::vector<EdgePoint>> points(static_cast<size_t>(n));
+  std::vector<Status> status(static_cast<size_t>(n), Status::success());
+  cv::parallel_for_(
+      cv::Range(0, n),
+      [&](const cv::Range& range) {
+        for (int k = range.start; k < range.end; ++k) {
+          const ReferenceLevel& level = levels[static_cast<size_t>(k)];
+          const PinholeCamera level_camera = pyramidCamera(camera, k);
+          ImageF32 offsets;
+          auto flags = detectReferenceEdgesImpl(level, options, &offsets);
+          if (!flags.ok()) {
+            status[static_cast<size_t>(k)] = flags.error();
+            continue;
+          }
+          points[static_cast<size_t>(k)] = subsampleEdgePoints(
+              backProjectEdgesImpl(*flags, level.depth, level_camera, options, &offsets), level_camera, options);
+        }
+      },
+      n);
+  for (const Status& st : status) VKLOC_TRY_STATUS(st);
+  ref.points = std::move(points[0]);
+  for (int k = 1; k < n; ++k) ref.coarse_points.push_back(std::move(points[static_cast<size_t>(k)]));
   return ref;
 }
 
