@@ -38,6 +38,13 @@ endforeach()
 # The evaluation reads the written files back.
 run_ok("eval" eval --estimate ${WORK}/out/traj.txt --sequence ${seq} --frames ${WORK}/out/frames.csv)
 
+# The tracking benchmark on the same sequence: both backends in one process, a row each.
+run_ok("bench track" bench track --sequence ${seq} --runs 1 --backends cpu,vulkan)
+if(NOT out MATCHES "\ncpu +[0-9.]+ +[0-9.]+" OR NOT out MATCHES "\nvulkan +[0-9.]+ +[0-9.]+")
+  message(FATAL_ERROR "bench track output lacks a row per backend:\n${out}")
+endif()
+run_fails("bench track, missing sequence" "not found" bench track --sequence ${WORK}/nope)
+
 # Errors: missing sequence, bad option values, bad --init-offset.
 run_fails("missing sequence" "not|No such" track --sequence ${WORK}/nope --out ${WORK}/x.txt)
 run_fails("bad backend" "backend" track --sequence ${seq} --out ${WORK}/x.txt --backend gpu)
