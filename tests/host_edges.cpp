@@ -216,6 +216,30 @@ TEST(EdgePyramid, DownsampleIsConsistentWithPyramidCamera) {
   const ImageF32 flat = downsampleHalf(ImageF32(9, 7, 1, 42.0f));
   EXPECT_EQ(flat.width, 5);
   for (float v : flat.data) EXPECT_NEAR(v, 42.0f, 1e-4);
+  // Every output, borders included, equals the [1 3 3 1] / 8 filter with clamped taps, for even
+  // and odd sizes (the interior loop runs without clamping).
+  for (int w : {1, 2, 3, 4, 5, 6, 7, 8, 33, 640}) {
+    SCOPED_TRACE(::testing::Message() << "width " << w);
+    ImageF32 in(w, 5, 1);
+    for (int y = 0; y < 5; ++y) {
+      for (int x = 0; x < w; ++x) in.at(x, y) = static_cast<float>((x * 37 + y * 11) % 29);
+    }
+    const ImageF32 out = downsampleHalf(in);
+    ASSERT_EQ(out.width, (w + 1) / 2);
+    const double taps[4] = {1.0 / 8, 3.0 / 8, 3.0 / 8, 1.0 / 8};
+    auto clampi = [](int v, int n) { return std::min(std::max(v, 0), n - 1); };
+    for (int j = 0; j < out.height; ++j) {
+      for (int i = 0; i < out.width; ++i) {
+        double expected = 0;
+        for (int ty = 0; ty < 4; ++ty) {
+          for (int tx = 0; tx < 4; ++tx) {
+            expected += taps[ty] * taps[tx] * in.at(clampi(2 * i - 1 + tx, w), clampi(2 * j - 1 + ty, 5));
+          }
+        }
+        ASSERT_NEAR(out.at(i, j), expected, 1e-4) << i << "," << j;
+      }
+    }
+  }
 }
 
 TEST(EdgePyramid, LiveFrameLevelsAndErrors) {

@@ -252,13 +252,22 @@ ImageF32 downsampleHalf(const ImageF32& image) {
   constexpr float kTaps[4] = {1.0f / 8, 3.0f / 8, 3.0f / 8, 1.0f / 8};
   // Horizontal pass into an ow x h buffer, then vertical.
   ImageF32 tmp(ow, h, 1);
+  // Interior outputs (taps 2x-1 .. 2x+2 inside the row) without clamping, so the loop vectorises.
+  const int x_end = w >= 3 ? std::max(1, std::min(ow, (w - 3) / 2 + 1)) : 1;  // 2x + 2 <= w - 1
   for (int y = 0; y < h; ++y) {
     const float* row = &image.data[static_cast<size_t>(y) * w];
-    for (int x = 0; x < ow; ++x) {
+    float* out = &tmp.data[static_cast<size_t>(y) * ow];
+    auto clamped = [&](int x) {
       float s = 0;
       for (int t = 0; t < 4; ++t) s += kTaps[t] * row[clampi(2 * x - 1 + t, w)];
-      tmp.at(x, y) = s;
+      return s;
+    };
+    out[0] = clamped(0);
+    for (int x = 1; x < x_end; ++x) {
+      const float* r = row + 2 * x - 1;
+      out[x] = kTaps[0] * r[0] + kTaps[1] * r[1] + kTaps[2] * r[2] + kTaps[3] * r[3];
     }
+    for (int x = x_end; x < ow; ++x) out[x] = clamped(x);
   }
   ImageF32 out(ow, oh, 1);
   for (int y = 0; y < oh; ++y) {
@@ -273,37 +282,14 @@ ImageF32 downsampleHalf(const ImageF32& image) {
 
 namespace {
 
-/// computeDistanceField into `field`, reusing its memory and the scratch `inverted`.
-Status computeDistanceFieldInto(const ImageU8& edges, float truncation_px, DistanceField& field, cv::Mat& inverted) {
-  if (edges.empty() || edges.channels != 1 || edges.data.size() != static_cast<size_t>(edges.width) * edges.height) {
-    return makeError(ErrorCode::kInvalidArgument, "computeDistanceField: expected a non-empty single-channel edge map");
-  }
-  if (!(truncation_px > 0) || !std::isfinite(truncation_px)) {
-    return makeError(ErrorCode::kInvalidArgument, "computeDistanceField: truncation_px must be > 0 and finite");
-  }
-  const int w = edges.width;
-  const int h = edges.height;
-  field.truncation_px = truncation_px;
-  resetImage(field.distance, w, h, 1, truncation_px);
-  resetImage(field.gradient, w, h, 2, 0.0f);
-  // distanceTransform measures the distance to the nearest zero pixel: edges become zeros.
-  inverted.create(h, w, CV_8U);
-  bool any_edge = false;
-  for (int y = 0; y < h; ++y) {
-    uint8_t* dst = inverted.ptr<uint8_t>(y);
-    const uint8_t* src = &edges.data[static_cast<size_t>(y) * w];
-    for (int x = 0; x < w; ++x) {
-      dst[x] = src[x] ? 0 : 255;
-      any_edge = any_edge || src[x];
-    }
-  }
-  if (!any_edge) return Status::success();
-  cv::Mat dist(h, w, CV_32F, field.distance.data.data());
-  cv::distanceTransform(inverted, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
-  const float t = truncation_px;
-  for (float& d : field.distance.data) d = std::min(d, t);
-
-  // Central differences inside, one-sided on the border; zero where a value used is truncated.
+/// Gradient (G_u, G_v) of field.distance into field.gradient (sized by
+/// computeDistanceFieldInto; every value written): central differences inside, one-sided on the
+/// border; zero where a value used is truncated.
+void computeDistanceGradient(DistanceField& field) {
+  const int w = field.distance.width;
+  const int h = field.distance.height;
+  const float t = field.truncation_px;
+  std::fill(field.gradient.data.begin(), field.gradient.data.end(), 0.0f);
   const float* D = field.distance.data.data();
   float* G = field.gradient.data.data();
   for (int y = 0; y < h; ++y) {
@@ -331,6 +317,52 @@ Status computeDistanceFieldInto(const ImageU8& edges, float truncation_px, Dista
       }
     }
   }
+}
+
+/// computeDistanceField into `field`, reusing its memory and the scratch `inverted`; with
+/// with_gradient false the gradient is sized but not written (computeDistanceGradient fills it).
+Status computeDistanceFieldInto(const ImageU8& edges, float truncation_px, DistanceField& field, cv::Mat& inverted,
+                                bool with_gradient = true) {
+  if (edges.empty() || edges.channels != 1 || edges.data.size() != static_cast<size_t>(edges.width) * edges.height) {
+    return makeError(ErrorCode::kInvalidArgument, "computeDistanceField: expected a non-empty single-channel edge map");
+  }
+  if (!(truncation_px > 0) || !std::isfinite(truncation_px)) {
+    return makeError(ErrorCode::kInvalidArgument, "computeDistanceField: truncation_px must be > 0 and finite");
+  }
+  const int w = edges.width;
+  const int h = edges.height;
+  field.truncation_px = truncation_px;
+  // Sized only: the transform writes every distance, computeDistanceGradient every gradient.
+  auto size = [](ImageF32& image, int width, int height, int channels) {
+    image.width = width;
+    image.height = height;
+    image.channels = channels;
+    image.data.resize(static_cast<size_t>(width) * height * channels);
+  };
+  size(field.distance, w, h, 1);
+  size(field.gradient, w, h, 2);
+  // distanceTransform measures the distance to the nearest zero pixel: edges become zeros.
+  inverted.create(h, w, CV_8U);
+  bool any_edge = false;
+  for (int y = 0; y < h; ++y) {
+    uint8_t* dst = inverted.ptr<uint8_t>(y);
+    const uint8_t* src = &edges.data[static_cast<size_t>(y) * w];
+    for (int x = 0; x < w; ++x) {
+      dst[x] = src[x] ? 0 : 255;
+      any_edge = any_edge || src[x];
+    }
+  }
+  if (!any_edge) {
+    std::fill(field.distance.data.begin(), field.distance.data.end(), truncation_px);
+    std::fill(field.gradient.data.begin(), field.gradient.data.end(), 0.0f);
+    return Status::success();
+  }
+  cv::Mat dist(h, w, CV_32F, field.distance.data.data());
+  cv::distanceTransform(inverted, dist, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
+  const float t = truncation_px;
+  for (float& d : field.distance.data) d = std::min(d, t);
+
+  if (with_gradient) computeDistanceGradient(field);
   return Status::success();
 }
 
@@ -431,9 +463,10 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
   // Named by reference: inside the lambda below `pyramid` would be the worker thread's own.
   const std::vector<ImageF32>& grays = pyramid;
   // Per level: edges (with their gradients), then the distance field and the edge lines, which
-  // both read only the edges. Two parallel rounds over tasks ordered by cost: round 1 the edges
-  // of level 0 | of the coarser levels; round 2 the distance field of level 0 | level 0's edge
-  // lines and the coarser levels' fields and lines.
+  // both read only the edges. Level 0 is about four times the work of the rest together: round 1
+  // runs level 0's edges beside the coarser levels' edges and fields; then level 0's distance
+  // transform alone (OpenCV's precise transform uses both cores when not nested); round 2 its
+  // gradient and the coarser levels' edge lines beside its edge lines.
   struct LevelScratch {
     EdgeGradients gradients;
     ImageU8 edges;
@@ -451,10 +484,10 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
     status[static_cast<size_t>(level)] =
         detectEdgesImpl(grays[static_cast<size_t>(level)], options.detector, sc.gradients, sc.edges);
   };
-  auto fieldOf = [&](int level) {
+  auto fieldOf = [&](int level, bool with_gradient) {
     LevelScratch& sc = scratch[static_cast<size_t>(level)];
     status[static_cast<size_t>(built + level)] = computeDistanceFieldInto(
-        sc.edges, options.truncation_px, frame.levels[static_cast<size_t>(level)].field, sc.inverted);
+        sc.edges, options.truncation_px, frame.levels[static_cast<size_t>(level)].field, sc.inverted, with_gradient);
   };
   auto linesOf = [&](int level) {
     LevelScratch& sc = scratch[static_cast<size_t>(level)];
@@ -475,17 +508,21 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
   };
   twoWays([&] { edgesOf(0); },
           [&] {
-            for (int level = 1; level < built; ++level) edgesOf(level);
-          });
-  for (const Status& st : status) VKLOC_TRY_STATUS(st);
-  twoWays([&] { fieldOf(0); },
-          [&] {
-            linesOf(0);
             for (int level = 1; level < built; ++level) {
-              fieldOf(level);
-              linesOf(level);
+              edgesOf(level);
+              if (!status[static_cast<size_t>(level)].ok()) continue;
+              fieldOf(level, true);
             }
           });
+  for (const Status& st : status) VKLOC_TRY_STATUS(st);
+  fieldOf(0, false);
+  VKLOC_TRY_STATUS(status[static_cast<size_t>(built)]);
+  twoWays(
+      [&] {
+        computeDistanceGradient(frame.levels[0].field);
+        for (int level = 1; level < built; ++level) linesOf(level);
+      },
+      [&] { linesOf(0); });
   for (int level = 0; level < built; ++level) {
     LiveLevel& out = frame.levels[static_cast<size_t>(level)];
     if (options.keep_intermediate) {
