@@ -159,7 +159,7 @@ double median(const std::vector<double>& v) { return v.empty() ? NAN : stats(v).
 void runTrackBench(const TrackBenchArgs& a) {
   const Sequence seq = take(loadSequence(a.sequence));
   if (seq.images.empty()) throw Failure{fmt::format("{}: images.txt lists no image", a.sequence)};
-  const PinholeCamera camera = seq.camera.intrinsics;
+  const PinholeCamera camera = sequenceCamera(seq);
   const Model model = loadSequenceModel(seq);
   const Pose T_init = initialPose(seq, "");
   const size_t n = a.max_frames > 0 ? std::min(a.max_frames, seq.images.size()) : seq.images.size();

@@ -75,17 +75,7 @@ void run(const TrackArgs& a) {
   const auto t_start = std::chrono::steady_clock::now();
   const Sequence seq = take(loadSequence(a.sequence));
   if (seq.images.empty()) throw Failure{fmt::format("{}: images.txt lists no image", a.sequence)};
-  if (seq.camera.model != "pinhole") {
-    throw Failure{fmt::format("{}/camera.yaml: camera model '{}' is not supported yet (pinhole only)", a.sequence,
-                              seq.camera.model)};
-  }
-  for (double k : seq.camera.distortion) {
-    if (k != 0.0) {
-      throw Failure{
-          fmt::format("{}/camera.yaml: lens distortion is not supported yet; undistort the images first", a.sequence)};
-    }
-  }
-  const PinholeCamera camera = seq.camera.intrinsics;
+  const PinholeCamera camera = sequenceCamera(seq);
   LocalizerOptions options;
   options.backend = take(parseLocalizerBackend(a.backend));
   options.policy = take(parseRerenderPolicy(a.policy));

@@ -154,4 +154,18 @@ Pose initialPose(const Sequence& seq, const std::string& offset) {
   return T;
 }
 
+PinholeCamera sequenceCamera(const Sequence& seq) {
+  if (seq.camera.model != "pinhole") {
+    throw Failure{fmt::format("{}/camera.yaml: camera model '{}' is not supported yet (pinhole only)", seq.directory,
+                              seq.camera.model)};
+  }
+  for (double k : seq.camera.distortion) {
+    if (k != 0.0) {
+      throw Failure{fmt::format("{}/camera.yaml: lens distortion is not supported yet; undistort the images first",
+                                seq.directory)};
+    }
+  }
+  return seq.camera.intrinsics;
+}
+
 }  // namespace vkloc::cli

@@ -72,6 +72,9 @@ std::vector<std::string> writeRender(const std::string& dir, const std::string& 
 
 /// The sequence's model (file, or built-in demo placed by T_world_model); throws Failure.
 Model loadSequenceModel(const Sequence& seq);
+/// The sequence's camera for localization; throws Failure for a non-pinhole model or lens
+/// distortion (not supported yet).
+PinholeCamera sequenceCamera(const Sequence& seq);
 /// The sequence's initial pose (sequence.yaml, else ground truth at the first image), moved by
 /// `offset` = "dx,dy,dz,rx,ry,rz" (metres along world axes, degrees about camera axes; "" =
 /// none); throws Failure.

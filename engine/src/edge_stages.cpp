@@ -154,6 +154,15 @@ struct GpuEdgeStages::Impl {
   void recordHysteresis(int level, int passes);
   void recordDistance(int level);
   Status checkTracking(const Pose& T_camera_ref, int level) const;
+  /// Normal equations: the per-workgroup partial sums of the last normal-equation pass, added.
+  EdgeNormalEquations summedPartials() const {
+    EdgeNormalEquations eq{};
+    const auto* partial = static_cast<const float*>(partials.mapped);
+    for (uint32_t g = 0; g < kGridGroups; ++g) {
+      for (int i = 0; i < kEdgeNormalEquationSize; ++i) eq[i] += partial[g * EDGE_REDUCE_VEC4S * 4 + i];
+    }
+    return eq;
+  }
   EdgePush trackingPush(const Pose& T_camera_ref, int level) const;
 };
 
@@ -914,12 +923,7 @@ Result<EdgeEvaluation> GpuEdgeStages::evaluate(const Pose& T_camera_ref, int lev
   const auto* r = static_cast<const float*>(m.residuals.mapped);
   out.residuals.assign(r, r + count);
   out.sigma_px = static_cast<const EdgeControl*>(m.levels[level].control.mapped)->sigma_px;
-  EdgeNormalEquations eq{};
-  const auto* partial = static_cast<const float*>(m.partials.mapped);
-  for (uint32_t g = 0; g < kGridGroups; ++g) {
-    for (int i = 0; i < kEdgeNormalEquationSize; ++i) eq[i] += partial[g * EDGE_REDUCE_VEC4S * 4 + i];
-  }
-  out.eq = eq;
+  out.eq = m.summedPartials();
   return out;
 }
 
@@ -930,8 +934,7 @@ Result<EdgeNormalEquations> GpuEdgeStages::accumulate(const Pose& T_camera_ref, 
     return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages::accumulate: sigma_px and nu must be > 0 and finite");
   }
   m.timings.clear();
-  EdgeNormalEquations out{};
-  if ((m.level_offsets.empty() ? m.point_count : m.level_counts[level]) == 0) return out;
+  if ((m.level_offsets.empty() ? m.point_count : m.level_counts[level]) == 0) return EdgeNormalEquations{};
   EdgePush push = m.trackingPush(T_camera_ref, level);
   push.robust[0] = static_cast<float>(sigma_px);
   push.robust[1] = static_cast<float>(nu);
@@ -939,11 +942,7 @@ Result<EdgeNormalEquations> GpuEdgeStages::accumulate(const Pose& T_camera_ref, 
   m.dispatch(kNormalEquations, level, push, kGridGroups);
   m.mark("normal equations");
   VKLOC_TRY_STATUS(m.submit());
-  const auto* partial = static_cast<const float*>(m.partials.mapped);
-  for (uint32_t g = 0; g < kGridGroups; ++g) {
-    for (int i = 0; i < kEdgeNormalEquationSize; ++i) out[i] += partial[g * EDGE_REDUCE_VEC4S * 4 + i];
-  }
-  return out;
+  return m.summedPartials();
 }
 
 }  // namespace vkloc

@@ -140,10 +140,9 @@ struct Localizer::Impl {
   std::optional<int64_t> last_t_ns;  // last frame given to localize
   double last_inlier_ratio = 1.0;
   bool last_lost = false;
-  bool gpu_frame_ready = false;
-  LiveFrame cpu_live;  // CPU live stages of the current image; its buffers are reused per frame
-  bool tracked_since_reset =
-      false;  // a frame was tracked since create/reset  // the current image is already processed on the device
+  bool gpu_frame_ready = false;      // the current image is already processed on the device
+  LiveFrame cpu_live;                // CPU live stages of the current image; buffers reused per frame
+  bool tracked_since_reset = false;  // a frame was tracked since create/reset
 
   Result<RenderOutput> render(const Pose& T_world_camera) {
     RenderSettings settings = options.render;
