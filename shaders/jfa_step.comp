@@ -1,15 +1,18 @@
 #version 450
 // Jump flooding, one pass of step k: each pixel keeps the nearest of the seeds held by itself
-// and its 8 neighbours at offsets of k pixels. flags 0: SEED_A -> SEED_B, 1: SEED_B -> SEED_A.
+// and its 8 neighbours at offsets of k pixels. kFromB 0: SEED_A -> SEED_B, 1: SEED_B -> SEED_A
+// (a specialization constant, not a push constant: lavapipe's SIMD code otherwise loads from
+// both images and selects).
 #extension GL_GOOGLE_include_directive : require
 #include "edge_layout.h"
 
+layout(constant_id = 0) const int kFromB = 0;
 layout(local_size_x = 16, local_size_y = 16) in;
 layout(push_constant) uniform Push { EdgePush pc; };
 layout(set = 0, binding = EDGE_BINDING_SEED_A, r32ui) uniform uimage2D seeds_a;
 layout(set = 0, binding = EDGE_BINDING_SEED_B, r32ui) uniform uimage2D seeds_b;
 
-uint load(ivec2 q) { return pc.flags == 0u ? imageLoad(seeds_a, q).x : imageLoad(seeds_b, q).x; }
+uint load(ivec2 q) { return kFromB == 0 ? imageLoad(seeds_a, q).x : imageLoad(seeds_b, q).x; }
 
 void main() {
   ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -30,7 +33,7 @@ void main() {
       }
     }
   }
-  if (pc.flags == 0u) {
+  if (kFromB == 0) {
     imageStore(seeds_b, p, uvec4(best));
   } else {
     imageStore(seeds_a, p, uvec4(best));

@@ -52,6 +52,7 @@ enum Kernel : int {
   kHysteresis,
   kJfaInit,
   kJfaStep,
+  kJfaStepFromB,
   kDistance,
   kDistanceGradient,
   kEdgeLines,
@@ -63,13 +64,13 @@ enum Kernel : int {
 
 struct KernelSpec {
   const char* shader;
-  int mode;  // specialization constant 0 (reduce_edges.comp only), -1 = none
+  int mode;  // specialization constant 0 (reduce_edges.comp, jfa_step.comp), -1 = none
 };
 constexpr KernelSpec kKernels[kKernelCount] = {
-    {"edge_convert.comp", -1}, {"pyramid_down.comp", -1},  {"edge_sobel.comp", -1},      {"edge_hist.comp", -1},
-    {"edge_select.comp", -1},  {"edge_nms.comp", -1},      {"edge_hysteresis.comp", -1}, {"jfa_init.comp", -1},
-    {"jfa_step.comp", -1},     {"edge_distance.comp", -1}, {"edge_dgrad.comp", -1},      {"edge_lines.comp", -1},
-    {"reduce_edges.comp", 0},  {"reduce_edges.comp", 1},   {"edge_scale.comp", -1}};
+    {"edge_convert.comp", -1}, {"pyramid_down.comp", -1}, {"edge_sobel.comp", -1},      {"edge_hist.comp", -1},
+    {"edge_select.comp", -1},  {"edge_nms.comp", -1},     {"edge_hysteresis.comp", -1}, {"jfa_init.comp", -1},
+    {"jfa_step.comp", 0},      {"jfa_step.comp", 1},      {"edge_distance.comp", -1},   {"edge_dgrad.comp", -1},
+    {"edge_lines.comp", -1},   {"reduce_edges.comp", 0},  {"reduce_edges.comp", 1},     {"edge_scale.comp", -1}};
 
 uint32_t groups(int n, int local) { return static_cast<uint32_t>((n + local - 1) / local); }
 
@@ -577,7 +578,7 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
   for (int s : steps) {
     push.step = s;
     push.flags = in_b ? 1u : 0u;
-    dispatch(kJfaStep, level, push, gx, gy);
+    dispatch(in_b ? kJfaStepFromB : kJfaStep, level, push, gx, gy);
     in_b = !in_b;
   }
   L.seeds_in_b = in_b;
