@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 
 #include "analytic_scenes.hpp"
@@ -436,11 +437,20 @@ double medianMs(std::vector<double> v) {
 
 // Benchmark, not a check: per-stage GPU times at 640x480 vs the CPU functions in the same run.
 // Run: vkloc_gpu_tests --gtest_also_run_disabled_tests --gtest_filter=GpuEdges.DISABLED_Benchmark640x480
+// On a noise image (dense edges), or on the 640x480 image named by VKLOC_BENCH_IMAGE.
 TEST_F(GpuEdges, DISABLED_Benchmark640x480) {
   const PinholeCamera camera{520.0, 520.0, 319.5, 239.5, 640, 480};
   LiveFrameOptions options;
   options.levels = 3;
-  const ImageU8 gray = randomImage(640, 480, 5);
+  ImageU8 gray = randomImage(640, 480, 5);
+  if (const char* path = std::getenv("VKLOC_BENCH_IMAGE"); path && *path) {
+    auto loaded = readImageU8(path, 1);
+    ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+    ASSERT_EQ(loaded->width, 640);
+    ASSERT_EQ(loaded->height, 480);
+    gray = std::move(*loaded);
+    std::printf("image %s\n", path);
+  }
   auto stages = makeStages(camera, options);
   ASSERT_TRUE(stages);
   const int runs = 15;

@@ -72,6 +72,14 @@ constexpr KernelSpec kKernels[kKernelCount] = {
     {"jfa_step.comp", 0},      {"jfa_step.comp", 1},      {"edge_distance.comp", -1},   {"edge_dgrad.comp", -1},
     {"edge_lines.comp", -1},   {"reduce_edges.comp", 0},  {"reduce_edges.comp", 1},     {"edge_scale.comp", -1}};
 
+constexpr bool everyKernelHasAShader() {
+  for (const KernelSpec& k : kKernels) {
+    if (k.shader == nullptr) return false;
+  }
+  return true;
+}
+static_assert(everyKernelHasAShader(), "kKernels lists fewer shaders than Kernel has values");
+
 uint32_t groups(int n, int local) { return static_cast<uint32_t>((n + local - 1) / local); }
 
 void computeBarrier(VkCommandBuffer cmd) {
@@ -107,7 +115,7 @@ struct GpuEdgeStages::Impl {
 
   struct Level {
     PinholeCamera camera;
-    engine::Image gray, mag, grad, state, seed_a, seed_b, distance, dgrad, lines;
+    engine::Image gray, mag, grad, state, seed_a, seed_b, distance, dgrad, lines, epoints;
     Buffer hist, control, candidates;
     VkDescriptorSet set = VK_NULL_HANDLE;
     bool seeds_in_b = false;  // where the final jump-flooding seeds are
@@ -217,7 +225,8 @@ Status GpuEdgeStages::Impl::init() {
                                  {&level.seed_b, VK_FORMAT_R32_UINT},
                                  {&level.distance, VK_FORMAT_R32_SFLOAT},
                                  {&level.dgrad, VK_FORMAT_R32G32_SFLOAT},
-                                 {&level.lines, VK_FORMAT_R32G32B32A32_SFLOAT}}) {
+                                 {&level.lines, VK_FORMAT_R32G32B32A32_SFLOAT},
+                                 {&level.epoints, VK_FORMAT_R32G32B32A32_SFLOAT}}) {
       auto img = storageImage(w, h, format);
       if (!img.ok()) return img.error();
       *image = std::move(*img);
@@ -249,7 +258,8 @@ Status GpuEdgeStages::Impl::init() {
   std::vector<VkDescriptorSetLayoutBinding> bindings(EDGE_BINDING_COUNT);
   for (uint32_t b = 0; b < EDGE_BINDING_COUNT; ++b) {
     bindings[b].binding = b;
-    const bool image = (b >= EDGE_BINDING_GRAY_PREV && b <= EDGE_BINDING_DGRAD) || b == EDGE_BINDING_LINES;
+    const bool image = (b >= EDGE_BINDING_GRAY_PREV && b <= EDGE_BINDING_DGRAD) || b == EDGE_BINDING_LINES ||
+                       b == EDGE_BINDING_EPOINTS;
     bindings[b].descriptorType = image ? VK_DESCRIPTOR_TYPE_STORAGE_IMAGE : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     bindings[b].descriptorCount = 1;
     bindings[b].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
@@ -261,7 +271,7 @@ Status GpuEdgeStages::Impl::init() {
   VKLOC_VK(vkCreateDescriptorSetLayout(device, &lci, nullptr, &layout));
   set_layout = DeviceHandle<VkDescriptorSetLayout>(device, layout, vkDestroyDescriptorSetLayout);
   const uint32_t n_sets = static_cast<uint32_t>(levels.size());
-  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 10 * n_sets},
+  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 11 * n_sets},
                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7 * n_sets}};
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.maxSets = n_sets;
@@ -277,7 +287,7 @@ Status GpuEdgeStages::Impl::init() {
     ai.descriptorSetCount = 1;
     ai.pSetLayouts = &layout;
     VKLOC_VK(vkAllocateDescriptorSets(device, &ai, &L.set));
-    const engine::Image* images[10] = {k > 0 ? &levels[k - 1].gray : &L.gray,
+    const engine::Image* images[11] = {k > 0 ? &levels[k - 1].gray : &L.gray,
                                        &L.gray,
                                        &L.mag,
                                        &L.grad,
@@ -286,14 +296,15 @@ Status GpuEdgeStages::Impl::init() {
                                        &L.seed_b,
                                        &L.distance,
                                        &L.dgrad,
-                                       &L.lines};
-    VkDescriptorImageInfo image_infos[10];
-    VkWriteDescriptorSet writes[14];
-    for (int i = 0; i < 10; ++i) {
+                                       &L.lines,
+                                       &L.epoints};
+    VkDescriptorImageInfo image_infos[11];
+    VkWriteDescriptorSet writes[15];
+    for (int i = 0; i < 11; ++i) {
       image_infos[i] = {VK_NULL_HANDLE, images[i]->view.get(), VK_IMAGE_LAYOUT_GENERAL};
       writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       writes[i].dstSet = L.set;
-      writes[i].dstBinding = i < 9 ? EDGE_BINDING_GRAY_PREV + i : EDGE_BINDING_LINES;
+      writes[i].dstBinding = i < 9 ? EDGE_BINDING_GRAY_PREV + i : (i == 9 ? EDGE_BINDING_LINES : EDGE_BINDING_EPOINTS);
       writes[i].descriptorCount = 1;
       writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
       writes[i].pImageInfo = &image_infos[i];
@@ -304,14 +315,14 @@ Status GpuEdgeStages::Impl::init() {
     VkDescriptorBufferInfo buffer_infos[4];
     for (int i = 0; i < 4; ++i) {
       buffer_infos[i] = {buffers[i]->buffer.get(), 0, VK_WHOLE_SIZE};
-      writes[10 + i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-      writes[10 + i].dstSet = L.set;
-      writes[10 + i].dstBinding = buffer_bindings[i];
-      writes[10 + i].descriptorCount = 1;
-      writes[10 + i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-      writes[10 + i].pBufferInfo = &buffer_infos[i];
+      writes[11 + i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+      writes[11 + i].dstSet = L.set;
+      writes[11 + i].dstBinding = buffer_bindings[i];
+      writes[11 + i].descriptorCount = 1;
+      writes[11 + i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      writes[11 + i].pBufferInfo = &buffer_infos[i];
     }
-    vkUpdateDescriptorSets(device, 14, writes, 0, nullptr);
+    vkUpdateDescriptorSets(device, 15, writes, 0, nullptr);
   }
   VKLOC_TRY_STATUS(updatePointBindings());
 
@@ -380,7 +391,7 @@ Status GpuEdgeStages::Impl::init() {
     std::vector<VkImageMemoryBarrier> barriers;
     for (Level& L : levels) {
       for (engine::Image* image :
-           {&L.gray, &L.mag, &L.grad, &L.state, &L.seed_a, &L.seed_b, &L.distance, &L.dgrad, &L.lines}) {
+           {&L.gray, &L.mag, &L.grad, &L.state, &L.seed_a, &L.seed_b, &L.distance, &L.dgrad, &L.lines, &L.epoints}) {
         VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
         b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
         b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;

@@ -35,7 +35,8 @@ namespace vkloc::engine {
 #define EDGE_BINDING_RESIDUALS 14   // SSBO: float[] residual per point (pixels), -1 = invalid
 #define EDGE_BINDING_PARTIALS 15    // SSBO: vec4[group * 8 + k] per-workgroup normal equations
 #define EDGE_BINDING_LINES 16       // rgba32f: sub-pixel edge line (s, n_u, n_v, 0), LiveLevel::edge_lines
-#define EDGE_BINDING_COUNT 17
+#define EDGE_BINDING_EPOINTS 17     // rgba32f: sub-pixel edge point (e_u, e_v, n_u, n_v) of an NMS-kept pixel
+#define EDGE_BINDING_COUNT 18
 
 #define EDGE_HIST_BINS 2048u
 #define EDGE_MAX_HYSTERESIS_PASSES 64
