@@ -90,6 +90,15 @@ void computeBarrier(VkCommandBuffer cmd) {
                        VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &mb, 0, nullptr, 0, nullptr);
 }
 
+// Shader writes -> transfer reads (image read-backs).
+void transferReadBarrier(VkCommandBuffer cmd) {
+  VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+  mb.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &mb, 0, nullptr,
+                       0, nullptr);
+}
+
 void hostBarrier(VkCommandBuffer cmd) {
   VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
   mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
@@ -124,6 +133,7 @@ struct GpuEdgeStages::Impl {
   std::vector<Level> levels;
   Buffer input8;
   Buffer points, residuals, partials;
+  Buffer distance_readback;     // nearEdgeFraction's read-back of a level's distance image
   uint32_t point_count = 0;     // points of the single list (setReference)
   uint32_t point_capacity = 0;  // capacity of `points`, in points
   // Per-level lists (setLevelPoints): first point and count per level; empty = single list.
@@ -700,11 +710,7 @@ Result<LiveFrame> GpuEdgeStages::readLiveFrame() {
   if (!staging.ok()) return staging.error();
   std::vector<std::array<VkDeviceSize, 5>> offsets;
   VKLOC_TRY_STATUS(m.ctx->runOnce([&](VkCommandBuffer c) {
-    VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-    mb.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
-    vkCmdPipelineBarrier(c, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &mb, 0, nullptr,
-                         0, nullptr);
+    transferReadBarrier(c);
     VkDeviceSize offset = 0;
     for (auto& L : m.levels) {
       std::array<VkDeviceSize, 5> o{};
@@ -721,10 +727,7 @@ Result<LiveFrame> GpuEdgeStages::readLiveFrame() {
       }
       offsets.push_back(o);
     }
-    mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-    vkCmdPipelineBarrier(c, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr, 0,
-                         nullptr);
+    hostBarrier(c);
   }));
   const auto* base = static_cast<const uint8_t*>(staging->mapped);
   LiveFrame frame;
@@ -802,22 +805,22 @@ Result<double> GpuEdgeStages::nearEdgeFraction(int level, double threshold_px) {
   VKLOC_TRY_STATUS(m.checkTracking(Pose::Identity(), level));
   const auto& L = m.levels[level];
   const size_t n = static_cast<size_t>(L.camera.width) * L.camera.height;
-  auto staging = m.ctx->createBuffer(static_cast<VkDeviceSize>(n) * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
-  if (!staging.ok()) return staging.error();
+  // One read-back buffer kept for every level (sized for level 0): the call runs once per frame.
+  if (!m.distance_readback.buffer) {
+    const auto& L0 = m.levels[0];
+    auto b = m.ctx->createBuffer(static_cast<VkDeviceSize>(L0.camera.width) * L0.camera.height * 4,
+                                 VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
+    if (!b.ok()) return b.error();
+    m.distance_readback = std::move(*b);
+  }
+  const Buffer* staging = &m.distance_readback;
   VKLOC_TRY_STATUS(m.ctx->runOnce([&](VkCommandBuffer c) {
-    VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-    mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-    mb.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
-    vkCmdPipelineBarrier(c, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &mb, 0, nullptr,
-                         0, nullptr);
+    transferReadBarrier(c);
     VkBufferImageCopy region{};
     region.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     region.imageExtent = {L.distance.width, L.distance.height, 1};
     vkCmdCopyImageToBuffer(c, L.distance.image.get(), VK_IMAGE_LAYOUT_GENERAL, staging->buffer.get(), 1, &region);
-    mb.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-    vkCmdPipelineBarrier(c, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb, 0, nullptr, 0,
-                         nullptr);
+    hostBarrier(c);
   }));
   const auto* d = static_cast<const float*>(staging->mapped);
   size_t near = 0;
