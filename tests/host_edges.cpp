@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "analytic_scenes.hpp"
@@ -46,6 +47,47 @@ TEST(EdgeDistanceField, MatchesBruteForceEuclideanDistance) {
       EXPECT_LT(max_err, 1e-3) << "seed " << seed << " density " << density;
     }
   }
+}
+
+// The CPU field uses a separable transform that looks only ceil(truncation) - 1 pixels each way
+// (OpenCV's precise transform above 128 px): it must give OpenCV's values bit for bit wherever
+// those are below the truncation, at every truncation, density and shape, borders included.
+TEST(EdgeDistanceField, EqualsOpenCvPreciseTransformAtEveryTruncation) {
+  struct Case {
+    int w, h;
+    double density;
+  };
+  const Case cases[] = {{640, 480, 0.01}, {640, 480, 0.0003}, {97, 13, 0.05},
+                        {1, 50, 0.1},     {50, 1, 0.1},       {33, 29, 0.9}};
+  int compared = 0;
+  for (const Case& c : cases) {
+    for (uint32_t seed : {7u, 8u}) {
+      ImageU8 edges = randomEdgeMap(c.w, c.h, c.density, seed);
+      edges.at(0, 0) = 255;  // an edge on the border, and one in the last pixel
+      edges.at(c.w - 1, c.h - 1) = 255;
+      cv::Mat inverted(c.h, c.w, CV_8U);
+      for (int y = 0; y < c.h; ++y) {
+        for (int x = 0; x < c.w; ++x) inverted.at<uint8_t>(y, x) = edges.at(x, y) ? 0 : 255;
+      }
+      cv::Mat exact;
+      cv::distanceTransform(inverted, exact, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
+      for (float trunc : {0.5f, 1.0f, 2.5f, 7.0f, 20.0f, 128.0f, 128.5f, 300.0f}) {
+        auto field = computeDistanceField(edges, trunc);
+        ASSERT_TRUE(field.ok()) << field.error().message;
+        int mismatches = 0;
+        for (int y = 0; y < c.h; ++y) {
+          for (int x = 0; x < c.w; ++x) {
+            const float want = std::min(exact.at<float>(y, x), trunc);
+            mismatches += field->distance.at(x, y) != want;
+          }
+        }
+        EXPECT_EQ(mismatches, 0) << c.w << "x" << c.h << " density " << c.density << " seed " << seed << " truncation "
+                                 << trunc;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 6 * 2 * 8);
 }
 
 TEST(EdgeDistanceField, GradientPointsAwayFromTheNearestEdge) {

@@ -64,7 +64,7 @@ ImageF32 toFloat(const ImageU8& gray);
 /// Euclidean distance field of an edge map with its gradient (the V and G_u, G_v of eqs. 12-15).
 struct DistanceField {
   /// 1 channel, pixels: exact Euclidean distance from each pixel centre to the nearest edge
-  /// pixel centre (OpenCV DIST_L2 with DIST_MASK_PRECISE), clamped to truncation_px.
+  /// pixel centre (the values of OpenCV DIST_L2 with DIST_MASK_PRECISE), clamped to truncation_px.
   ImageF32 distance;
   /// 2 channels (G_u, G_v), pixels per pixel: central differences (d(i+1) - d(i-1)) / 2 of
   /// `distance` along u and v; one-sided differences on the image border; (0, 0) where the
