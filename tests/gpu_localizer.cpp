@@ -99,6 +99,77 @@ TEST_F(LocalizerTest, WhenNeededKeepsTheReferenceForAStillCamera) {
   EXPECT_EQ(rendered, 2);
 }
 
+TEST_F(LocalizerTest, InertialAidingBridgesBlankFramesAndRejectsDisagreeingAlignments) {
+  // The live image of the true pose rendered 5 cm to the side (about 9 px at the room's depth,
+  // well inside the alignment's basin): without the IMU the tracker follows it; with a still
+  // camera's IMU readings the alignment lies outside the inertial gate and is rejected.
+  Pose T_moved = truth_;
+  T_moved.translation() += truth_.linear() * Eigen::Vector3d(0.05, 0.0, 0.0);
+  auto renderer = GpuRenderer::create(context_, model_);
+  ASSERT_TRUE(renderer.ok()) << renderer.error().message;
+  auto moved_view = (*renderer)->render(vga(), T_moved);
+  ASSERT_TRUE(moved_view.ok()) << moved_view.error().message;
+  const ImageU8 blank(640, 480, 1, 128);
+  constexpr int64_t kFrameNs = 50'000'000;
+  for (bool with_imu : {true, false}) {
+    LocalizerOptions options;
+    options.backend = LocalizerBackend::kCpu;
+    options.policy = RerenderPolicy::kEveryFrame;
+    auto created = Localizer::create(model_, vga(), options, context_);
+    ASSERT_TRUE(created.ok()) << created.error().message;
+    Localizer& localizer = **created;
+    localizer.reset(truth_);
+    // A still camera (body = camera): no rotation rate, the accelerometer reads -R^T g.
+    int64_t t_imu = 0;
+    auto feedImu = [&](int64_t until_ns) {
+      for (; with_imu && t_imu <= until_ns; t_imu += 5'000'000) {
+        ImuSample s;
+        s.t_ns = t_imu;
+        s.accel_body = -(truth_.linear().transpose() * Eigen::Vector3d(0.0, 0.0, -9.81));
+        ASSERT_TRUE(localizer.addImu(s).ok());
+      }
+    };
+    int64_t t = 0;
+    auto frame = [&](const ImageU8& image) {
+      feedImu(t);
+      auto r = localizer.localize(t, image);
+      t += kFrameNs;
+      EXPECT_TRUE(r.ok()) << r.error().message;
+      return r.ok() ? *r : LocalizationResult{};
+    };
+    for (int i = 0; i < 6; ++i) {
+      const LocalizationResult r = frame(gray_);
+      EXPECT_EQ(r.state, TrackingState::kTracking) << "frame " << i;
+      EXPECT_FALSE(r.visual_rejected);
+    }
+    // Nothing to align with: the inertial pose, or lost without the IMU.
+    LocalizationResult r = frame(blank);
+    if (with_imu) {
+      EXPECT_EQ(r.state, TrackingState::kInertial);
+      EXPECT_LT(translationError(r.T_world_camera, truth_), 2e-3);
+      EXPECT_LT(rotationErrorDeg(r.T_world_camera, truth_), 0.05);
+      EXPECT_GT(r.inertial_sigma_m, 0.0);
+      EXPECT_GT(r.covariance(0, 0), 0.0);
+    } else {
+      EXPECT_EQ(r.state, TrackingState::kLost);
+    }
+    // Back to the true image: tracked again.
+    r = frame(gray_);
+    EXPECT_EQ(r.state, TrackingState::kTracking) << "with_imu " << with_imu;
+    EXPECT_LT(translationError(r.T_world_camera, truth_), 5e-3);
+    // The moved image: followed without the IMU, rejected with it.
+    r = frame(moved_view->gray);
+    if (with_imu) {
+      EXPECT_TRUE(r.visual_rejected);
+      EXPECT_EQ(r.state, TrackingState::kInertial);
+      EXPECT_LT(translationError(r.T_world_camera, truth_), 2e-3);
+    } else {
+      EXPECT_EQ(r.state, TrackingState::kTracking);
+      EXPECT_LT(translationError(r.T_world_camera, T_moved), 5e-3);
+    }
+  }
+}
+
 TEST_F(LocalizerTest, BadInputIsAnErrorNotACrash) {
   LocalizerOptions options;
   options.backend = LocalizerBackend::kCpu;

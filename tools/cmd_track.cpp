@@ -30,6 +30,7 @@ struct TrackArgs {
   std::string report_dir;
   std::string init_offset;  ///< "dx,dy,dz,rx,ry,rz": metres (world axes), degrees (camera axes).
   bool calibrate = false;
+  bool no_imu = false;
   bool quiet = false;
   DeviceArgs device;
   bool no_vulkan = false;
@@ -85,6 +86,11 @@ void run(const TrackArgs& a) {
   } else if (a.motion != "constant-velocity") {
     throw Failure{fmt::format("--motion '{}': expected constant-velocity or last-pose", a.motion)};
   }
+  // Inertial aiding from the sequence's IMU readings (body frame) and camera mounting.
+  const bool use_imu = !a.no_imu && !seq.imu.empty();
+  options.inertial.enabled = use_imu;
+  options.inertial.T_body_camera = seq.camera.T_body_camera;
+  options.inertial.predictor.gravity_world = seq.gravity_world;
   const Pose T_init = initialPose(seq, a.init_offset);
 
   const Model model = loadSequenceModel(seq);
@@ -99,6 +105,8 @@ void run(const TrackArgs& a) {
     std::printf("sequence %s: %zu of %zu images, %dx%d; model %zu triangles\n", seq.name.c_str(), total,
                 seq.images.size(), camera.width, camera.height, model.triangleCount());
     std::printf("%s\n", localizer->backendSummary().c_str());
+    std::printf("inertial aiding: %s\n", use_imu ? fmt::format("on ({} IMU readings)", seq.imu.size()).c_str()
+                                                 : (seq.imu.empty() ? "off (no imu.csv)" : "off (--no-imu)"));
     std::fflush(stdout);
   }
 
@@ -109,7 +117,9 @@ void run(const TrackArgs& a) {
                                       : a.frames_csv;
   LineWriter traj(a.out);
   LineWriter frames(frames_path);
-  traj.line("# vkloc track: T_world_camera, TUM format: t tx ty tz qx qy qz qw (lost frames are not listed)");
+  traj.line(
+      "# vkloc track: T_world_camera, TUM format: t tx ty tz qx qy qz qw (lost frames are not listed; inertial-only "
+      "ones are)");
   frames.line(
       "t_ns,state,render_ms,reference_ms,live_ms,align_ms,total_ms,inlier_ratio,mean_residual_px,points,iterations,"
       "rerendered,visible_ratio,spread_ratio,chance_inlier_ratio,scale_px");
@@ -118,20 +128,29 @@ void run(const TrackArgs& a) {
   size_t last_decile = 0;
   std::vector<StampedPose> estimate;
   std::vector<double> total_ms, depths;
-  size_t lost = 0, rerendered = 0, lost_after_first = 0;
+  size_t lost = 0, inertial = 0, rejected = 0, rerendered = 0, lost_after_first = 0;
+  size_t next_imu = 0;
   long first_tracked = -1;
   double first_frame_ms = 0;
   const auto t_frames = std::chrono::steady_clock::now();
   for (size_t i = 0; i < total; ++i) {
     const ImageEntry& entry = seq.images[i];
     ImageU8 gray = take(readImageU8(seq.imagePath(i), 1));
+    for (; use_imu && next_imu < seq.imu.size() && seq.imu[next_imu].t_ns <= entry.t_ns; ++next_imu) {
+      // A bad reading is skipped (the predictor keeps the others); say so once per reading.
+      const Status st = localizer->addImu(seq.imu[next_imu]);
+      if (!st.ok()) std::fprintf(stderr, "warning: imu.csv reading %zu: %s\n", next_imu, st.error().message.c_str());
+    }
     Result<LocalizationResult> r = localizer->localize(entry.t_ns, gray);
     if (!r.ok()) throw Failure{fmt::format("{}: frame {}: {}", seq.imagePath(i), i, r.error().message)};
     const LocalizationResult& f = *r;
     const bool tracking = f.state == TrackingState::kTracking;
+    const bool has_pose = tracking || f.state == TrackingState::kInertial;
     if (tracking && first_tracked < 0) first_tracked = static_cast<long>(i);
-    lost_after_first += !tracking && first_tracked >= 0;
-    if (tracking) {
+    lost_after_first += !has_pose && first_tracked >= 0;
+    inertial += f.state == TrackingState::kInertial;
+    rejected += f.visual_rejected;
+    if (has_pose) {
       traj.line(fmt::format("{} {}", seconds(entry.t_ns), formatPose(f.T_world_camera)));
       estimate.push_back({entry.t_ns, f.T_world_camera});
     } else {
@@ -140,7 +159,7 @@ void run(const TrackArgs& a) {
     rerendered += f.reference_rendered;
     frames.line(
         fmt::format("{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f}",
-                    entry.t_ns, tracking ? "tracking" : "lost", f.render_ms, f.reference_ms, f.live_ms, f.align_ms,
+                    entry.t_ns, trackingStateName(f.state), f.render_ms, f.reference_ms, f.live_ms, f.align_ms,
                     f.total_ms, f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used,
                     f.quality.iterations, f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio,
                     f.quality.chance_inlier_ratio, f.quality.scale_px));
@@ -154,14 +173,16 @@ void run(const TrackArgs& a) {
       const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_frames).count();
       const double fps = s > 0 ? static_cast<double>(i + 1) / s : 0.0;
       if (tty) {
-        std::printf("\rframe %zu/%zu  %.1f fps  lost %zu  re-rendered %zu", i + 1, total, fps, lost, rerendered);
+        std::printf("\rframe %zu/%zu  %.1f fps  lost %zu  inertial %zu  re-rendered %zu", i + 1, total, fps, lost,
+                    inertial, rerendered);
         if (i + 1 == total) std::printf("\n");
         std::fflush(stdout);
       } else {
         const size_t decile = (i + 1) * 10 / total;
         if (decile > last_decile) {
           last_decile = decile;
-          std::printf("frame %zu/%zu, %.1f fps, lost %zu, re-rendered %zu\n", i + 1, total, fps, lost, rerendered);
+          std::printf("frame %zu/%zu, %.1f fps, lost %zu, inertial %zu, re-rendered %zu\n", i + 1, total, fps, lost,
+                      inertial, rerendered);
           std::fflush(stdout);
         }
       }
@@ -171,13 +192,15 @@ void run(const TrackArgs& a) {
 
   // Evaluation against ground truth.
   std::string summary = fmt::format(
-      "{{\n  \"sequence\": \"{}\",\n  \"frames\": {},\n  \"lost\": {},\n  \"rerendered\": {},\n  \"backend\": \"{}\",\n"
+      "{{\n  \"sequence\": \"{}\",\n  \"frames\": {},\n  \"lost\": {},\n  \"inertial\": {},\n  \"visual_rejected\": "
+      "{},\n"
+      "  \"rerendered\": {},\n  \"backend\": \"{}\",\n"
       "  \"policy\": \"{}\",\n  \"startup_ms\": {:.1f},\n  \"first_frame_ms\": {:.1f},\n  \"median_frame_ms\": "
       "{:.3f},\n"
       "  \"hz_median\": {:.3f},\n  \"first_tracked_frame\": {},\n  \"lost_after_first_tracked\": {},\n  "
       "\"scene_depth_median_m\": {:.6g}",
-      seq.name, total, lost, rerendered, localizerBackendName(options.backend), a.policy, setup_ms, first_frame_ms,
-      total_ms.empty() ? 0.0 : median(total_ms), hz, first_tracked, lost_after_first, median(depths));
+      seq.name, total, lost, inertial, rejected, rerendered, localizerBackendName(options.backend), a.policy, setup_ms,
+      first_frame_ms, total_ms.empty() ? 0.0 : median(total_ms), hz, first_tracked, lost_after_first, median(depths));
   std::filesystem::path report_dir = a.report_dir.empty()
                                          ? out_path.parent_path() / (out_path.stem().string() + "_report")
                                          : std::filesystem::path(a.report_dir);
@@ -217,9 +240,10 @@ void run(const TrackArgs& a) {
   summary += "\n}\n";
   check(writeReportFile((report_dir / "track.json").string(), summary));
   std::printf(
-      "tracked %zu frames, %zu lost, %zu references rendered: %.1f Hz (median %.1f ms per frame after the first); "
+      "tracked %zu frames, %zu lost, %zu inertial only, %zu references rendered: %.1f Hz (median %.1f ms per frame "
+      "after the first); "
       "start-up %.0f ms, first frame %.0f ms (includes shader compilation)\n",
-      total, lost, rerendered, hz, total_ms.empty() ? 0.0 : median(total_ms), setup_ms, first_frame_ms);
+      total, lost, inertial, rerendered, hz, total_ms.empty() ? 0.0 : median(total_ms), setup_ms, first_frame_ms);
   std::printf("wrote %s and %s\n", a.out.c_str(), frames_path.c_str());
 }
 
@@ -244,6 +268,7 @@ void addTrackOptions(CLI::App* cmd, const std::shared_ptr<TrackArgs>& args) {
   cmd->add_option("--init-offset", args->init_offset,
                   "Perturb the initial pose: 'dx,dy,dz,rx,ry,rz' (metres on world axes, degrees about camera axes)");
   cmd->add_flag("--calibrate", args->calibrate, "With --backend auto: time CPU and Vulkan on the first frame");
+  cmd->add_flag("--no-imu", args->no_imu, "Ignore the sequence's imu.csv (no inertial aiding)");
   cmd->add_flag("--no-vulkan", args->no_vulkan, "Render with the CPU reference rasterizer (slow)");
   cmd->add_flag("--quiet,-q", args->quiet, "Print only the final line");
   args->device.add(*cmd);

@@ -64,6 +64,17 @@ Status validateOptions(const LocalizerOptions& o) {
                      "init_confident_inlier_ratio in 0..1");
   }
   if (r.max_frames < 1) return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.max_frames must be >= 1");
+  const InertialAiding& ia = o.inertial;
+  if (!isValidPose(ia.T_body_camera)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: inertial.T_body_camera is not a finite rigid transform");
+  }
+  if (!finiteIn(ia.gate_depth_ratio, 0.0, 1e3) || !finiteIn(ia.gate_sigmas, 0.0, 1e3) ||
+      !finiteIn(ia.gate_rotation_deg, 0.0, 180.0) || !finiteIn(ia.max_inertial_s, 0.0, 1e4)) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "Localizer: need inertial.gate_depth_ratio and gate_sigmas in 0..1e3, gate_rotation_deg in "
+                     "0..180 and max_inertial_s in 0..1e4");
+  }
+  VKLOC_TRY_STATUS(validateInertialOptions(ia.predictor));
   VKLOC_TRY_STATUS(validateRenderSettings(o.render));
   VKLOC_TRY_STATUS(validateReferenceEdgeOptions(o.reference));
   VKLOC_TRY_STATUS(validateEdgeTrackerOptions(o.tracker));
@@ -140,9 +151,11 @@ struct Localizer::Impl {
   std::optional<int64_t> last_t_ns;  // last frame given to localize
   double last_inlier_ratio = 1.0;
   bool last_lost = false;
-  bool gpu_frame_ready = false;      // the current image is already processed on the device
-  LiveFrame cpu_live;                // CPU live stages of the current image; buffers reused per frame
-  bool tracked_since_reset = false;  // a frame was tracked since create/reset
+  bool gpu_frame_ready = false;                 // the current image is already processed on the device
+  LiveFrame cpu_live;                           // CPU live stages of the current image; buffers reused per frame
+  bool tracked_since_reset = false;             // a frame was tracked since create/reset
+  InertialPredictor inertial;                   // accepted visual poses (body) and IMU readings
+  Matrix6d last_covariance = Matrix6d::Zero();  // of the last accepted visual pose
 
   Result<RenderOutput> render(const Pose& T_world_camera) {
     RenderSettings settings = options.render;
@@ -332,6 +345,7 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
   VKLOC_TRY_STATUS(validateModel(model));
   auto impl = std::make_unique<Impl>();
   impl->options = options;
+  impl->inertial = InertialPredictor(options.inertial.predictor);
   // Pyramid levels nobody reads are not built: the tracker starts at coarsest_level and the
   // far-points-first hypothesis at far_first_coarsest_level (-1: the live frame's coarsest).
   const EdgeTrackerOptions& t = options.tracker;
@@ -395,8 +409,11 @@ void Localizer::reset(const Pose& T_world_camera) {
   m.last_inlier_ratio = 1.0;
   m.last_lost = false;
   m.tracked_since_reset = false;
+  m.inertial.reset();  // timestamps may start over
   if (isValidPose(T_world_camera)) m.last_pose = T_world_camera;
 }
+
+Status Localizer::addImu(const ImuSample& sample) { return impl_->inertial.addImu(sample); }
 
 std::string Localizer::backendSummary() const {
   const Impl& m = *impl_;
@@ -432,7 +449,16 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   if (!T_world_camera_guess && !m.last_pose) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: no pose guess and no previous pose; call reset() first");
   }
-  const Pose guess = T_world_camera_guess ? *T_world_camera_guess : m.predict(t_ns);
+  // Inertial prediction (when readings are given and enough visual poses were accepted).
+  const InertialAiding& aiding = m.options.inertial;
+  std::optional<InertialPrediction> inertial;
+  std::optional<Pose> T_world_camera_inertial;
+  if (aiding.enabled && m.inertial.hasImu()) inertial = m.inertial.predict(t_ns);
+  if (inertial && inertial->since_fix_s > aiding.max_inertial_s) inertial.reset();
+  if (inertial) T_world_camera_inertial = inertial->T_world_body * aiding.T_body_camera;
+  const Pose guess = T_world_camera_guess      ? *T_world_camera_guess
+                     : T_world_camera_inertial ? *T_world_camera_inertial
+                                               : m.predict(t_ns);
 
   LocalizationResult out;
   out.t_ns = t_ns;
@@ -493,7 +519,20 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   out.covariance = track->covariance;
   out.reference_points = static_cast<int>(m.reference->points.size());
   out.scene_depth_m = m.reference_depth_m;
-  if (track->state == TrackingState::kTracking) {
+  if (inertial) {
+    out.inertial_sigma_m = inertial->sigma_m;
+    if (track->state == TrackingState::kTracking) {
+      // Consistency gate: the visual pose must agree with the IMU-propagated one.
+      const Pose d = T_world_camera_inertial->inverse() * track->T_world_camera;
+      const double depth = m.reference_depth_m > 0 ? m.reference_depth_m : 1.0;
+      const double gate_m =
+          aiding.gate_depth_ratio * depth + aiding.gate_sigmas * std::hypot(inertial->sigma_m, inertial->fit_rms_m);
+      out.visual_rejected = d.translation().norm() > gate_m || rotationDeg(d.linear()) > aiding.gate_rotation_deg;
+    }
+  }
+  if (track->state == TrackingState::kTracking && !out.visual_rejected) {
+    m.inertial.addFix(t_ns, track->T_world_camera * aiding.T_body_camera.inverse());
+    m.last_covariance = track->covariance;
     m.prev_pose = m.last_pose;
     m.prev_pose_t_ns = m.last_pose_t_ns;
     m.last_pose = track->T_world_camera;
@@ -505,9 +544,21 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   } else {
     // Keep the last trusted pose and its motion: the next guess extrapolates the last tracked
     // velocity over the time since (predict() scales it by at most 10 frame intervals), so a
-    // camera that keeps moving through a few untrackable frames is found again.
+    // camera that keeps moving through a few untrackable frames is found again; with the IMU
+    // the inertial prediction is reported and is the next guess.
     if (!m.last_pose) m.last_pose = guess;
     m.last_lost = true;
+    if (inertial) {
+      out.state = TrackingState::kInertial;
+      out.T_world_camera = *T_world_camera_inertial;
+      // The last accepted frame's rotation uncertainty (gyro drift over max_inertial_s is far
+      // below it), the prediction's in translation.
+      out.covariance = Matrix6d::Zero();
+      out.covariance.bottomRightCorner<3, 3>() = m.last_covariance.bottomRightCorner<3, 3>();
+      out.covariance.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() * (inertial->sigma_m * inertial->sigma_m);
+    } else {
+      out.state = TrackingState::kLost;
+    }
   }
   out.total_ms = msSince(t_start);
   return out;

@@ -182,6 +182,18 @@ EdgeNormalEquations accumulateEdgeNormalEquations(const std::vector<EdgePoint>& 
   return out;
 }
 
+const char* trackingStateName(TrackingState state) {
+  switch (state) {
+    case TrackingState::kTracking:
+      return "tracking";
+    case TrackingState::kLost:
+      return "lost";
+    case TrackingState::kInertial:
+      return "inertial";
+  }
+  return "?";
+}
+
 Status validateEdgeTrackerOptions(const EdgeTrackerOptions& o) {
   if (!finiteIn(o.nu, 1e-3, 1e6))
     return makeError(ErrorCode::kInvalidArgument, "edge tracker: nu must be in 1e-3..1e6");

@@ -148,7 +148,14 @@ struct EdgeTrackerOptions {
 Status validateEdgeTrackerOptions(const EdgeTrackerOptions& options);
 
 /// Tracking state decided from TrackQuality (never by silently diverging).
-enum class TrackingState { kTracking, kLost };
+enum class TrackingState {
+  kTracking,  ///< The alignment is trusted.
+  kLost,      ///< No trusted pose.
+  kInertial,  ///< Localizer only: the pose is the IMU prediction (see InertialAiding).
+};
+
+/// "tracking" | "lost" | "inertial" (the frames log's state column).
+const char* trackingStateName(TrackingState state);
 
 /// How well the final pose explains the live edges, measured on the finest level used.
 struct TrackQuality {

@@ -18,6 +18,7 @@
 #include "vkloc/edge_tracker.hpp"
 #include "vkloc/edges.hpp"
 #include "vkloc/image.hpp"
+#include "vkloc/inertial.hpp"
 #include "vkloc/model.hpp"
 #include "vkloc/pose.hpp"
 #include "vkloc/render.hpp"
@@ -64,6 +65,22 @@ struct RerenderThresholds {
   int max_frames = 10;             ///< This many frames were tracked against the same reference.
 };
 
+/// Inertial aiding, active once IMU readings are given (Localizer::addImu): the guess for a frame
+/// is the IMU-propagated pose (InertialPredictor, fed with the accepted visual poses), a visual
+/// result farther from it than the gate is rejected, and a frame whose alignment is lost or
+/// rejected reports the inertial pose (state kInertial) for up to max_inertial_s after the last
+/// accepted visual pose. Gate: translation <= gate_depth_ratio x scene depth + gate_sigmas x
+/// sqrt(sigma_pred^2 + fit_rms^2) (InertialPrediction), rotation <= gate_rotation_deg.
+struct InertialAiding {
+  bool enabled = true;                    ///< Use readings given with addImu.
+  Pose T_body_camera = Pose::Identity();  ///< Camera frame into the body (IMU) frame, metres.
+  InertialOptions predictor;              ///< Gravity, velocity-fit window, uncertainty model.
+  double gate_depth_ratio = 0.005;        ///< Translation gate floor, fraction of the median scene depth.
+  double gate_sigmas = 4.0;               ///< Translation gate, prediction sigmas added to the floor.
+  double gate_rotation_deg = 1.5;         ///< Rotation gate, degrees.
+  double max_inertial_s = 2.0;            ///< Longest inertial-only stretch before frames are lost, seconds.
+};
+
 /// Everything the Localizer can be tuned with. Plain data; checked by Localizer::create.
 struct LocalizerOptions {
   LocalizerBackend backend = LocalizerBackend::kAuto;   ///< Backend of the live stages and alignment.
@@ -108,6 +125,7 @@ struct LocalizerOptions {
   /// surfaces passing close to the camera are smeared by motion blur and their edges alias onto
   /// wrong ones (city_hard frames 52-58, 0.3 m from a wall: errors 3-11 mm instead of 6-24 mm).
   double max_point_motion_px = 40.0;
+  InertialAiding inertial;  ///< IMU-propagated guesses and consistency gate (when readings are given).
   /// With kAuto and a Vulkan device: time the CPU and Vulkan live stages + alignment on the first
   /// frame and keep the faster one (instead of deciding by the device type alone).
   bool calibrate_backend = false;
@@ -119,16 +137,20 @@ struct LocalizationResult {
   Pose T_world_camera = Pose::Identity();  ///< Estimated pose (not trusted when lost).
   /// Covariance of xi (m^2, rad^2, [rho; phi], live camera frame; see TrackResult::covariance).
   Matrix6d covariance = Matrix6d::Zero();
-  TrackQuality quality;                        ///< Alignment quality on the finest level.
-  TrackingState state = TrackingState::kLost;  ///< kTracking when the pose is trusted.
-  bool reference_rendered = false;             ///< A new reference was rendered for this frame.
-  int reference_points = 0;                    ///< Edge points of the finest reference level.
-  double scene_depth_m = 0;  ///< Median depth of the reference render's surfaces, metres (0: none seen).
-  double render_ms = 0;      ///< Rendering the reference, ms (0 when kept).
-  double reference_ms = 0;   ///< Extracting reference edge points, ms.
-  double live_ms = 0;        ///< Live pyramid, edges and distance fields, ms.
-  double align_ms = 0;       ///< Gauss-Newton alignment, ms.
-  double total_ms = 0;       ///< Whole localize() call, ms.
+  TrackQuality quality;  ///< Alignment quality on the finest level.
+  /// kTracking: the visual alignment is trusted; kInertial: it was lost or disagreed with the
+  /// IMU, T_world_camera is the inertial prediction (InertialAiding); kLost: no trusted pose.
+  TrackingState state = TrackingState::kLost;
+  bool visual_rejected = false;     ///< The alignment tracked but lay outside the inertial gate.
+  double inertial_sigma_m = 0;      ///< 1-sigma of the inertial prediction, metres (0: none made).
+  bool reference_rendered = false;  ///< A new reference was rendered for this frame.
+  int reference_points = 0;         ///< Edge points of the finest reference level.
+  double scene_depth_m = 0;         ///< Median depth of the reference render's surfaces, metres (0: none seen).
+  double render_ms = 0;             ///< Rendering the reference, ms (0 when kept).
+  double reference_ms = 0;          ///< Extracting reference edge points, ms.
+  double live_ms = 0;               ///< Live pyramid, edges and distance fields, ms.
+  double align_ms = 0;              ///< Gauss-Newton alignment, ms.
+  double total_ms = 0;              ///< Whole localize() call, ms.
 };
 
 /// Tracks a camera through a model, one frame at a time. Not thread-safe.
@@ -153,7 +175,11 @@ class Localizer {
   Result<LocalizationResult> localize(int64_t t_ns, const ImageU8& gray,
                                       const std::optional<Pose>& T_world_camera_guess = std::nullopt);
 
-  /// Forgets the motion and the reference and restarts from T_world_camera (e.g. the known
+  /// Gives one IMU reading (body frame; InertialAiding). Readings up to a frame's time should be
+  /// given before the frame. kInvalidArgument for a non-finite reading or a time not after the
+  /// previous reading's (the reading is ignored; tracking goes on).
+  Status addImu(const ImuSample& sample);
+  /// Forgets the motion, the IMU readings and the reference and restarts from T_world_camera (e.g. the known
   /// initial pose, or after relocalization). Timestamps may start over. An invalid pose is
   /// ignored (the next localize() then needs a guess).
   void reset(const Pose& T_world_camera);
