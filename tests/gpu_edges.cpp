@@ -63,10 +63,18 @@ int differingPixels(const ImageU8& a, const ImageU8& b) {
 class GpuEdges : public GpuTest {
  protected:
   std::unique_ptr<GpuEdgeStages> makeStages(const PinholeCamera& camera, const LiveFrameOptions& options = {}) {
-    auto stages = GpuEdgeStages::create(context_, camera, options);
+    auto stages = GpuEdgeStages::create(context_, camera, options, method_);
     EXPECT_TRUE(stages.ok()) << (stages.ok() ? "" : stages.error().message);
+    if (stages.ok() && method_ != GpuDistanceMethod::kAuto) {
+      EXPECT_EQ((*stages)->distanceMethod(), method_);
+    }
     return stages.ok() ? std::move(*stages) : nullptr;
   }
+
+  /// Distance method of makeStages (kAuto: the device's default).
+  GpuDistanceMethod method_ = GpuDistanceMethod::kAuto;
+  static constexpr GpuDistanceMethod kBothMethods[2] = {GpuDistanceMethod::kJumpFlooding,
+                                                        GpuDistanceMethod::kSeparable};
 
   /// GPU live frame vs CPU: pyramid within 1e-3 gray levels, edge maps equal except <= 0.1 %
   /// of the pixels (NMS ties decided by float rounding), distance field vs the exact CPU EDT of
@@ -110,6 +118,10 @@ class GpuEdges : public GpuTest {
       }
       EXPECT_LE(off, n / 10000) << "pixels off by > 0.05 px";
       EXPECT_LE(worst, 0.5);
+      if (stages->distanceMethod() == GpuDistanceMethod::kSeparable) {
+        EXPECT_LE(worst, 1e-5) << "the separable transform is exact";
+        EXPECT_EQ(grad_off, 0);
+      }
       EXPECT_LE(grad_off, n / 1000);
 
       if (!options.subpixel_edges) {
@@ -136,9 +148,12 @@ class GpuEdges : public GpuTest {
 TEST_F(GpuEdges, LiveFrameMatchesCpuOnSeededImages) {
   LiveFrameOptions options;
   options.levels = 3;
-  for (unsigned seed : {1u, 2u}) {
-    SCOPED_TRACE(::testing::Message() << "seed " << seed);
-    compareLiveFrame(randomImage(320, 240, seed), qvga(), options);
+  for (GpuDistanceMethod method : kBothMethods) {
+    method_ = method;
+    for (unsigned seed : {1u, 2u}) {
+      SCOPED_TRACE(::testing::Message() << "seed " << seed << ", " << gpuDistanceMethodName(method));
+      compareLiveFrame(randomImage(320, 240, seed), qvga(), options);
+    }
   }
 }
 
@@ -152,10 +167,13 @@ TEST_F(GpuEdges, LiveFrameMatchesCpuWithOddSizeAndOtherOptions) {
   options.detector.high_factor = 3.0;
   options.detector.low_ratio = 0.5;
   const PinholeCamera camera{200.0, 200.0, 100.0, 70.0, 201, 143};
-  for (bool subpixel : {true, false}) {
-    SCOPED_TRACE(::testing::Message() << "subpixel_edges " << subpixel);
-    options.subpixel_edges = subpixel;
-    compareLiveFrame(randomImage(201, 143, 7, 6), camera, options);
+  for (GpuDistanceMethod method : kBothMethods) {
+    method_ = method;
+    for (bool subpixel : {true, false}) {
+      SCOPED_TRACE(::testing::Message() << "subpixel_edges " << subpixel << ", " << gpuDistanceMethodName(method));
+      options.subpixel_edges = subpixel;
+      compareLiveFrame(randomImage(201, 143, 7, 6), camera, options);
+    }
   }
 }
 
@@ -382,31 +400,35 @@ TEST_F(GpuEdges, SparseEdgesGiveExactDistancesUpToTheTruncation) {
   }
   LiveFrameOptions options;
   options.levels = 1;
-  auto stages = makeStages(qvga(), options);
-  ASSERT_TRUE(stages);
-  ASSERT_TRUE(stages->processLiveImage(gray).ok());
-  auto gpu = stages->readLiveFrame();
-  ASSERT_TRUE(gpu.ok());
-  const LiveLevel& g = gpu->levels[0];
-  auto exact = computeDistanceField(g.edges, options.truncation_px);
-  ASSERT_TRUE(exact.ok());
-  int far = 0, off = 0;
-  for (size_t i = 0; i < exact->distance.data.size(); ++i) {
-    const float e = exact->distance.data[i];
-    far += e > 10.0f && e < options.truncation_px;
-    off += std::abs(g.field.distance.data[i] - e) > 1e-4f;
+  for (GpuDistanceMethod method : kBothMethods) {
+    SCOPED_TRACE(gpuDistanceMethodName(method));
+    method_ = method;
+    auto stages = makeStages(qvga(), options);
+    ASSERT_TRUE(stages);
+    ASSERT_TRUE(stages->processLiveImage(gray).ok());
+    auto gpu = stages->readLiveFrame();
+    ASSERT_TRUE(gpu.ok());
+    const LiveLevel& g = gpu->levels[0];
+    auto exact = computeDistanceField(g.edges, options.truncation_px);
+    ASSERT_TRUE(exact.ok());
+    int far = 0, off = 0;
+    for (size_t i = 0; i < exact->distance.data.size(); ++i) {
+      const float e = exact->distance.data[i];
+      far += e > 10.0f && e < options.truncation_px;
+      off += std::abs(g.field.distance.data[i] - e) > 1e-4f;
+    }
+    EXPECT_GT(far, 3000);
+    EXPECT_EQ(off, 0);
+    auto cpu = buildLiveFrame(gray, qvga(), options);
+    ASSERT_TRUE(cpu.ok());
+    ASSERT_EQ(cpu->levels[0].edge_lines.data.size(), g.edge_lines.data.size());
+    double worst_line = 0;
+    for (size_t i = 0; i < g.edge_lines.data.size(); ++i) {
+      worst_line =
+          std::max(worst_line, std::abs(static_cast<double>(g.edge_lines.data[i]) - cpu->levels[0].edge_lines.data[i]));
+    }
+    EXPECT_LE(worst_line, 1e-3);
   }
-  EXPECT_GT(far, 3000);
-  EXPECT_EQ(off, 0);
-  auto cpu = buildLiveFrame(gray, qvga(), options);
-  ASSERT_TRUE(cpu.ok());
-  ASSERT_EQ(cpu->levels[0].edge_lines.data.size(), g.edge_lines.data.size());
-  double worst_line = 0;
-  for (size_t i = 0; i < g.edge_lines.data.size(); ++i) {
-    worst_line =
-        std::max(worst_line, std::abs(static_cast<double>(g.edge_lines.data[i]) - cpu->levels[0].edge_lines.data[i]));
-  }
-  EXPECT_LE(worst_line, 1e-3);
 }
 
 TEST_F(GpuEdges, RejectsBadInput) {
@@ -428,6 +450,13 @@ TEST_F(GpuEdges, RejectsBadInput) {
   LiveFrameOptions bad;
   bad.levels = 0;
   EXPECT_FALSE(GpuEdgeStages::create(context_, qvga(), bad).ok());
+  LiveFrameOptions wide;
+  wide.truncation_px = 66.0f;  // beyond the separable transform's radius
+  EXPECT_EQ(GpuEdgeStages::create(context_, qvga(), wide, GpuDistanceMethod::kSeparable).error().code,
+            ErrorCode::kInvalidArgument);
+  auto fallback = GpuEdgeStages::create(context_, qvga(), wide);
+  ASSERT_TRUE(fallback.ok());
+  EXPECT_EQ((*fallback)->distanceMethod(), GpuDistanceMethod::kJumpFlooding);
 }
 
 double medianMs(std::vector<double> v) {

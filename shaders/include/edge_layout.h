@@ -24,7 +24,7 @@ namespace vkloc::engine {
 #define EDGE_BINDING_MAG 3          // r32f: Sobel/8 gradient magnitude
 #define EDGE_BINDING_GRAD 4         // rg32f: Sobel/8 gradient (gx, gy)
 #define EDGE_BINDING_STATE 5        // r32ui: 0 none, 1 weak candidate, 2 edge
-#define EDGE_BINDING_SEED_A 6       // r32ui: jump-flooding seeds, x | y << 16, ~0u = none
+#define EDGE_BINDING_SEED_A 6       // r32ui: JFA seeds x | y << 16 (~0u none), or edt_columns' g^2
 #define EDGE_BINDING_SEED_B 7       // r32ui: ping-pong partner of SEED_A
 #define EDGE_BINDING_DISTANCE 8     // r32f: truncated distance to the nearest edge, pixels
 #define EDGE_BINDING_DGRAD 9        // rg32f: distance gradient (G_u, G_v)
@@ -41,6 +41,7 @@ namespace vkloc::engine {
 #define EDGE_HIST_BINS 2048u
 #define EDGE_MAX_HYSTERESIS_PASSES 64
 #define EDGE_NO_SEED 0xffffffffu
+#define EDGE_EDT_MAX_RADIUS 64   // edt_rows.comp: R = ceil(truncation) - 1 <= this
 #define EDGE_LINE_RADIUS_PX 2.0  // kEdgeLineRadiusPx of edges.hpp, pixels of a level
 #define EDGE_REDUCE_VEC4S 8      // 29 values of the normal equations in 8 vec4s (3 unused)
 

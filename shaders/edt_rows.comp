@@ -1,0 +1,42 @@
+#version 450
+// Exact truncated distance transform, row pass (eq. 12's V(u) as min over dx of dx^2 + g^2):
+// each invocation finishes kSpan consecutive pixels of one row from the squared column
+// distances g^2 of edt_columns.comp (SEED_A): it reads the kSpan + 2R values around them once
+// ((R + 1)^2 outside the image) and keeps the kSpan running minima in registers (the radius
+// R = ceil(truncation) - 1 is a specialization constant, so the inner loop unrolls). Terms
+// with |dx| > R are >= (R + 1)^2 >= truncation^2 and can only give the clamped value, so every
+// window position is added to every pixel without a range test. Writes the distance, clamped
+// to the truncation.
+#extension GL_GOOGLE_include_directive : require
+#include "edge_layout.h"
+
+layout(constant_id = 0) const int kRadius = 19;
+const int kSpan = 8;
+layout(local_size_x = 64) in;
+layout(push_constant) uniform Push { EdgePush pc; };
+layout(set = 0, binding = EDGE_BINDING_SEED_A, r32ui) readonly uniform uimage2D g2;
+layout(set = 0, binding = EDGE_BINDING_DISTANCE, r32f) writeonly uniform image2D distance_px;
+
+void main() {
+  int spans = (pc.width + kSpan - 1) / kSpan;
+  int id = int(gl_GlobalInvocationID.x);
+  int y = id / spans;
+  if (y >= pc.height) return;
+  int x0 = (id - y * spans) * kSpan;
+  uint far2 = uint((kRadius + 1) * (kRadius + 1));
+  uint best[kSpan];
+  for (int j = 0; j < kSpan; ++j) best[j] = 0xffffffffu;
+  for (int i = 0; i < kSpan + 2 * kRadius; ++i) {
+    int x = x0 - kRadius + i;
+    uint v = (x >= 0 && x < pc.width) ? imageLoad(g2, ivec2(x, y)).x : far2;
+    for (int j = 0; j < kSpan; ++j) {
+      int dx = i - kRadius - j;
+      best[j] = min(best[j], v + uint(dx * dx));
+    }
+  }
+  for (int j = 0; j < kSpan; ++j) {
+    if (x0 + j < pc.width) {
+      imageStore(distance_px, ivec2(x0 + j, y), vec4(min(sqrt(float(best[j])), pc.truncation_px)));
+    }
+  }
+}
