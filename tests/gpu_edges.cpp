@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <random>
 
 #include "analytic_scenes.hpp"
@@ -431,6 +432,27 @@ TEST_F(GpuEdges, SparseEdgesGiveExactDistancesUpToTheTruncation) {
   }
 }
 
+TEST_F(GpuEdges, StageTimingsOnlyWhenAskedFor) {
+  auto stages = makeStages(qvga());
+  ASSERT_TRUE(stages);
+  const ImageU8 gray = randomImage(320, 240, 3);
+  ASSERT_TRUE(stages->processLiveImage(gray).ok());
+  auto names = [&] {
+    std::vector<std::string> out;
+    for (const GpuStageTiming& t : stages->lastTimings()) out.push_back(t.stage);
+    return out;
+  };
+  EXPECT_EQ(names(), std::vector<std::string>{"submission (host)"});
+  stages->setStageTimings(true);
+  ASSERT_TRUE(stages->processLiveImage(gray).ok());
+  const std::vector<std::string> stages_named = names();
+  if (stages_named != std::vector<std::string>{"submission (host)"}) {  // the device has timestamps
+    EXPECT_NE(std::find(stages_named.begin(), stages_named.end(), "sobel"), stages_named.end());
+    EXPECT_NE(std::find(stages_named.begin(), stages_named.end(), "edge lines"), stages_named.end());
+  }
+  for (const GpuStageTiming& t : stages->lastTimings()) EXPECT_GE(t.ms, 0.0) << t.stage;
+}
+
 TEST_F(GpuEdges, RejectsBadInput) {
   auto stages = makeStages(qvga());
   ASSERT_TRUE(stages);
@@ -482,6 +504,7 @@ TEST_F(GpuEdges, DISABLED_Benchmark640x480) {
   }
   auto stages = makeStages(camera, options);
   ASSERT_TRUE(stages);
+  stages->setStageTimings(true);
   const int runs = 15;
   std::vector<std::pair<std::string, std::vector<double>>> gpu_stages;
   std::vector<double> gpu_total;
@@ -561,6 +584,24 @@ TEST_F(GpuEdges, DISABLED_Benchmark640x480) {
   std::printf("  GPU residuals        %8.3f / %8.3f ms\n", medianMs(g_res_dev), medianMs(g_res));
   std::printf("  GPU normal equations %8.3f / %8.3f ms\n", medianMs(g_acc_dev), medianMs(g_acc));
   std::printf("  CPU residuals        %8.3f ms\n  CPU normal equations %8.3f ms\n", medianMs(c_res), medianMs(c_acc));
+
+  // One Gauss-Newton evaluation (residuals, scale, normal equations in one submission) at the
+  // reference budget of 4000 points: what the tracker pays per iteration.
+  const std::vector<EdgePoint> budget(points.begin(), points.begin() + std::min<size_t>(4000, points.size()));
+  ASSERT_TRUE(stages->setReference(budget).ok());
+  std::vector<double> e_wall;
+  std::map<std::string, std::vector<double>> e_stage;
+  for (int i = 0; i < runs + 2; ++i) {
+    auto t0 = std::chrono::steady_clock::now();
+    ASSERT_TRUE(stages->evaluate(T, 0, 5.0, 5, 0.1).ok());
+    auto t1 = std::chrono::steady_clock::now();
+    if (i < 2) continue;
+    e_wall.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    for (const GpuStageTiming& st : stages->lastTimings()) e_stage[st.stage].push_back(st.ms);
+  }
+  std::printf("%zu points, one evaluate() (device per stage; host wall):\n", budget.size());
+  for (auto& [stage, ms] : e_stage) std::printf("  %-20s %8.3f ms\n", stage.c_str(), medianMs(ms));
+  std::printf("  %-20s %8.3f ms\n", "host wall", medianMs(e_wall));
 }
 
 }  // namespace

@@ -167,7 +167,8 @@ struct GpuEdgeStages::Impl {
   DeviceHandle<VkFence> fence;
   DeviceHandle<VkQueryPool> query_pool;
   VkCommandBuffer cmd = VK_NULL_HANDLE;
-  double timestamp_ns = 0;  // ns per tick; 0 = no timestamps
+  double timestamp_ns = 0;     // ns per tick; 0 = no timestamps
+  bool stage_timings = false;  // write timestamps between stages (setStageTimings)
   uint64_t timestamp_mask = ~0ull;
 
   // Timing of the current submission: query index -> stage whose end it marks.
@@ -491,7 +492,7 @@ Status GpuEdgeStages::Impl::begin() {
   bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   VKLOC_VK(vkBeginCommandBuffer(cmd, &bi));
   marks.clear();
-  if (query_pool) {
+  if (query_pool && stage_timings) {
     vkCmdResetQueryPool(cmd, query_pool.get(), 0, kMaxTimestamps);
     mark("");
   }
@@ -499,7 +500,7 @@ Status GpuEdgeStages::Impl::begin() {
 }
 
 void GpuEdgeStages::Impl::mark(const char* stage) {
-  if (!query_pool || marks.size() >= kMaxTimestamps) return;
+  if (!query_pool || !stage_timings || marks.size() >= kMaxTimestamps) return;
   vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, query_pool.get(), static_cast<uint32_t>(marks.size()));
   marks.emplace_back(stage);
 }
@@ -716,6 +717,8 @@ std::vector<int> GpuEdgeStages::lastHysteresisPasses() const {
 }
 
 const std::vector<GpuStageTiming>& GpuEdgeStages::lastTimings() const { return impl_->timings; }
+
+void GpuEdgeStages::setStageTimings(bool enabled) { impl_->stage_timings = enabled; }
 
 Status GpuEdgeStages::processLiveImage(const ImageU8& gray) {
   Impl& m = *impl_;
