@@ -158,6 +158,9 @@ struct GpuEdgeStages::Impl {
   bool have_frame = false;
   uint32_t wide_groups = kGridGroups;  // workgroups of histogram and hysteresis passes
   GpuDistanceMethod distance_method = GpuDistanceMethod::kJumpFlooding;  // resolved (never kAuto)
+  // Pixels per invocation of the Sobel, distance-gradient and edge-lines kernels: 8 on CPU
+  // drivers (one window read serves 8 pixels: lavapipe gathers lane by lane), 1 on GPUs.
+  int32_t span = 1;
 
   DeviceHandle<VkDescriptorSetLayout> set_layout;
   DeviceHandle<VkDescriptorPool> descriptor_pool;
@@ -191,6 +194,7 @@ struct GpuEdgeStages::Impl {
   void recordFront(int level);
   void recordHysteresis(int level, int passes);
   void recordDistance(int level);
+  void recordEdgeLines(int level, EdgePush push, uint32_t sx, uint32_t sy);
   Status checkTracking(const Pose& T_camera_ref, int level) const;
   /// Normal equations: the per-workgroup partial sums of the last normal-equation pass, added.
   EdgeNormalEquations summedPartials() const {
@@ -211,7 +215,9 @@ Result<engine::Image> GpuEdgeStages::Impl::storageImage(int w, int h, VkFormat f
 
 Status GpuEdgeStages::Impl::init() {
   device = ctx->device;
-  wide_groups = ctx->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? kGridGroups : kWideGridGroups;
+  const bool cpu_driver = ctx->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  wide_groups = cpu_driver ? kGridGroups : kWideGridGroups;
+  span = cpu_driver ? 8 : 1;
   for (VkFormat f :
        {VK_FORMAT_R32_SFLOAT, VK_FORMAT_R32G32_SFLOAT, VK_FORMAT_R32_UINT, VK_FORMAT_R32G32B32A32_SFLOAT}) {
     VkFormatProperties p{};
@@ -378,15 +384,18 @@ Status GpuEdgeStages::Impl::init() {
     // R = ceil(truncation) - 1 for the separable transform (unused by jump flooding).
     const int32_t edt_radius =
         std::clamp(static_cast<int32_t>(std::ceil(options.truncation_px)) - 1, 0, int32_t{EDGE_EDT_MAX_RADIUS});
-    const int32_t mode = kKernels[k].mode == kModeEdtRadius ? edt_radius : kKernels[k].mode;
-    VkSpecializationMapEntry entry{0, 0, sizeof(int32_t)};
-    VkSpecializationInfo spec{1, &entry, sizeof(int32_t), &mode};
+    // Constant 0: the kernel's mode; 1: pixels per invocation of the row-span kernels (ignored
+    // by shaders that declare no such constant).
+    const int32_t constants[2] = {kKernels[k].mode == kModeEdtRadius ? edt_radius : std::max(kKernels[k].mode, 0),
+                                  span};
+    const VkSpecializationMapEntry entries[2] = {{0, 0, sizeof(int32_t)}, {1, sizeof(int32_t), sizeof(int32_t)}};
+    VkSpecializationInfo spec{2, entries, sizeof(constants), constants};
     VkComputePipelineCreateInfo cpci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
     cpci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
     cpci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
     cpci.stage.module = module;
     cpci.stage.pName = "main";
-    cpci.stage.pSpecializationInfo = mode >= 0 ? &spec : nullptr;
+    cpci.stage.pSpecializationInfo = &spec;
     cpci.layout = pl;
     VkPipeline pipe = VK_NULL_HANDLE;
     VKLOC_VK(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipe));
@@ -569,7 +578,7 @@ void GpuEdgeStages::Impl::recordFront(int level) {
     dispatch(kPyramid, level, push, gx, gy);
     mark("pyramid");
   }
-  dispatch(kSobel, level, push, gx, gy);
+  dispatch(kSobel, level, push, groups(groups(push.width, span), 8), groups(push.height, 8));
   mark("sobel");
   vkCmdFillBuffer(cmd, L.hist.buffer.get(), 0, VK_WHOLE_SIZE, 0);
   vkCmdFillBuffer(cmd, L.control.buffer.get(), 0, VK_WHOLE_SIZE, 0);
@@ -608,15 +617,16 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
   Level& L = levels[level];
   EdgePush push = levelPush(level);
   const uint32_t gx = groups(push.width, 16), gy = groups(push.height, 16);
+  // Row-span kernels: 8 x 8 invocations of `span` pixels each.
+  const uint32_t sx = groups(groups(push.width, span), 8), sy = groups(push.height, 8);
   if (distance_method == GpuDistanceMethod::kSeparable) {
     dispatch(kEdtColumns, level, push, groups(push.width, 64));
     mark("edt columns");
     dispatch(kEdtRows, level, push, groups(groups(push.width, 8) * push.height, 64));
     mark("distance transform");
-    dispatch(kDistanceGradient, level, push, gx, gy);
+    dispatch(kDistanceGradient, level, push, sx, sy);
     mark("distance gradient");
-    push.flags = options.subpixel_edges ? 1u : 0u;
-    dispatch(kEdgeLines, level, push, gx, gy);
+    recordEdgeLines(level, push, sx, sy);
     mark("edge lines");
     return;
   }
@@ -640,11 +650,16 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
   mark("jfa");
   push.flags = in_b ? 1u : 0u;
   dispatch(kDistance, level, push, gx, gy);
-  dispatch(kDistanceGradient, level, push, gx, gy);
+  dispatch(kDistanceGradient, level, push, sx, sy);
   mark("distance+gradient");
-  push.flags = options.subpixel_edges ? 1u : 0u;
-  dispatch(kEdgeLines, level, push, gx, gy);
+  recordEdgeLines(level, push, sx, sy);
   mark("edge lines");
+}
+
+// Edge lines of a level (edge_lines.comp).
+void GpuEdgeStages::Impl::recordEdgeLines(int level, EdgePush push, uint32_t sx, uint32_t sy) {
+  push.flags = options.subpixel_edges ? 1u : 0u;
+  dispatch(kEdgeLines, level, push, sx, sy);
 }
 
 GpuEdgeStages::GpuEdgeStages(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
