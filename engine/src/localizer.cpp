@@ -171,7 +171,9 @@ struct Localizer::Impl {
     if (!view.ok()) return view.error();
     out.render_ms += msSince(t0);
     t0 = Clock::now();
-    Result<EdgeReference> ref = buildEdgeReference(*view, camera, T_world_camera, options.reference);
+    const double depth_m = medianDepth(view->depth);
+    // The render's depth and normals move into the reference's level 0 (no 5 MB copy).
+    Result<EdgeReference> ref = buildEdgeReference(std::move(*view), camera, T_world_camera, options.reference);
     if (!ref.ok()) return ref.error();
     if (kind_dropped[1] || kind_dropped[2] || kind_dropped[3]) {
       auto dropped = [&](uint32_t kind) {
@@ -188,7 +190,7 @@ struct Localizer::Impl {
     out.reference_ms += msSince(t0);
     reference = std::move(*ref);
     if (gpu_stages) VKLOC_TRY_STATUS(gpu_stages->setLevelPoints(*reference));
-    reference_depth_m = medianDepth(view->depth);
+    reference_depth_m = depth_m;
     frames_on_reference = 0;
     out.reference_rendered = true;
     return Status::success();

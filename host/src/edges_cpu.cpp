@@ -726,10 +726,20 @@ bool nearSurfaceResumes(const ImageF32& D, int x, int y, int sx, int sy, int gap
   return false;
 }
 
-/// Stage 1 (detectReferenceEdges); when texture_offsets is given it receives, per texture edge
-/// pixel, the sub-pixel offset (du, dv) of the edge from the pixel centre (2 channels, pixels).
-Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const ReferenceEdgeOptions& options,
-                                         ImageF32* texture_offsets = nullptr) {
+/// Geometric edge flags of a reference level (occlusion and crease flags; hole rims dropped and
+/// marked in hole_rim) and its texture edges; stage 1 merges them (mergeReferenceEdges). The two
+/// are independent, so buildEdgeReference runs them side by side.
+struct GeometricFlags {
+  ImageU8 flags;
+  ImageU8 hole_rim;  ///< 1 on both sides of a dropped hole-rim flag; empty when not searched.
+};
+struct TextureEdges {
+  EdgeGradients gradients;
+  ImageU8 edges;
+  Status status = Status::success();
+};
+
+GeometricFlags geometricReferenceFlags(const ReferenceLevel& view, const ReferenceEdgeOptions& options) {
   const int w = view.depth.width;
   const int h = view.depth.height;
   const bool have_normals =
@@ -789,6 +799,24 @@ Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const Refer
       }
     }
   }
+  return GeometricFlags{std::move(flags), std::move(hole_rim)};
+}
+
+void textureReferenceEdges(const ReferenceLevel& view, const ReferenceEdgeOptions& options, TextureEdges& out) {
+  out.status = detectEdgesImpl(view.gray, options.detector, out.gradients, out.edges);
+}
+
+/// Stage 1 (detectReferenceEdges) from its two halves; when texture_offsets is given it
+/// receives, per texture edge pixel, the sub-pixel offset (du, dv) of the edge from the pixel
+/// centre (2 channels, pixels). `texture` is null without texture edges.
+ImageU8 mergeReferenceEdges(const ReferenceLevel& view, GeometricFlags geometric_flags, const TextureEdges* texture,
+                            ImageF32* texture_offsets) {
+  ImageU8 flags = std::move(geometric_flags.flags);
+  if (texture == nullptr) return flags;
+  const ImageU8& hole_rim = geometric_flags.hole_rim;
+  const int w = view.depth.width;
+  const int h = view.depth.height;
+  const ImageF32& D = view.depth;
   auto nearHoleRim = [&](int x, int y) {
     if (hole_rim.empty()) return false;
     for (int dy = -1; dy <= 1; ++dy) {
@@ -800,38 +828,44 @@ Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const Refer
     }
     return false;
   };
-  if (options.texture_edges) {
-    EdgeGradients gradients;
-    ImageU8 edge_map;
-    VKLOC_TRY_STATUS(detectEdgesImpl(view.gray, options.detector, gradients, edge_map));
-    const ImageU8* edges = &edge_map;
-    if (texture_offsets) *texture_offsets = ImageF32(w, h, 2, 0.0f);
-    // A geometric edge that shows in the gray image is represented by its texture edge pixels
-    // (found by the same detector as the live image's edges, so both place it alike); the
-    // geometric flags next to such pixels are dropped.
-    ImageU8 geometric = flags;
-    for (int y = 0; y < h; ++y) {
-      for (int x = 0; x < w; ++x) {
-        if (!edges->at(x, y)) continue;
-        bool has_surface = D.at(x, y) > 0;
-        for (int dy = -1; dy <= 1; ++dy) {
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int nx = x + dx;
-            const int ny = y + dy;
-            if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-            has_surface = has_surface || geometric.at(nx, ny) != 0;
-            flags.at(nx, ny) &= kEdgePixelTexture;
-          }
+  const ImageU8* edges = &texture->edges;
+  if (texture_offsets) *texture_offsets = ImageF32(w, h, 2, 0.0f);
+  // A geometric edge that shows in the gray image is represented by its texture edge pixels
+  // (found by the same detector as the live image's edges, so both place it alike); the
+  // geometric flags next to such pixels are dropped.
+  ImageU8 geometric = flags;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      if (!edges->at(x, y)) continue;
+      bool has_surface = D.at(x, y) > 0;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = x + dx;
+          const int ny = y + dy;
+          if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+          has_surface = has_surface || geometric.at(nx, ny) != 0;
+          flags.at(nx, ny) &= kEdgePixelTexture;
         }
-        if (has_surface && !nearHoleRim(x, y)) {
-          flags.at(x, y) |= kEdgePixelTexture;
-          if (texture_offsets)
-            subpixelOffset(gradients, x, y, texture_offsets->at(x, y, 0), texture_offsets->at(x, y, 1));
+      }
+      if (has_surface && !nearHoleRim(x, y)) {
+        flags.at(x, y) |= kEdgePixelTexture;
+        if (texture_offsets) {
+          subpixelOffset(texture->gradients, x, y, texture_offsets->at(x, y, 0), texture_offsets->at(x, y, 1));
         }
       }
     }
   }
   return flags;
+}
+
+Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const ReferenceEdgeOptions& options,
+                                         ImageF32* texture_offsets = nullptr) {
+  GeometricFlags geometric = geometricReferenceFlags(view, options);
+  if (!options.texture_edges) return mergeReferenceEdges(view, std::move(geometric), nullptr, texture_offsets);
+  TextureEdges texture;
+  textureReferenceEdges(view, options, texture);
+  VKLOC_TRY_STATUS(texture.status);
+  return mergeReferenceEdges(view, std::move(geometric), &texture, texture_offsets);
 }
 
 }  // namespace
@@ -981,8 +1015,10 @@ std::vector<EdgePoint> subsampleEdgePoints(const std::vector<EdgePoint>& points,
   return out;
 }
 
-Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const PinholeCamera& camera, const Pose& T_world_ref,
-                                         const ReferenceEdgeOptions& options) {
+namespace {
+
+Status validateReferenceView(const RenderOutput& view, const PinholeCamera& camera, const Pose& T_world_ref,
+                             const ReferenceEdgeOptions& options) {
   VKLOC_TRY_STATUS(validateCamera(camera));
   if (!isValidPose(T_world_ref)) {
     return makeError(ErrorCode::kInvalidArgument, "buildEdgeReference: T_world_ref is not a valid rigid transform");
@@ -1000,12 +1036,18 @@ Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const Pinhole
       view.depth.channels != 1) {
     return makeError(ErrorCode::kInvalidArgument, "buildEdgeReference: view needs gray and depth of the camera's size");
   }
+  return Status::success();
+}
+
+/// buildEdgeReference from its level 0 (a checked view's gray as floats, depth, normals).
+Result<EdgeReference> buildEdgeReferenceFrom(ReferenceLevel level0, const PinholeCamera& camera,
+                                             const Pose& T_world_ref, const ReferenceEdgeOptions& options) {
   EdgeReference ref;
   ref.camera = camera;
   ref.T_world_ref = T_world_ref;
   // The pyramid of render targets first, then the levels in parallel (each reads only its own).
   std::vector<ReferenceLevel> levels;
-  levels.push_back(ReferenceLevel{toFloat(view.gray), view.depth, view.normals});
+  levels.push_back(std::move(level0));
   while (static_cast<int>(levels.size()) < options.levels) {
     const ReferenceLevel& finer = levels.back();
     if (finer.depth.width < 16 || finer.depth.height < 16) break;
@@ -1013,28 +1055,60 @@ Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const Pinhole
   }
   const int n = static_cast<int>(levels.size());
   std::vector<std::vector<EdgePoint>> points(static_cast<size_t>(n));
-  std::vector<Status> status(static_cast<size_t>(n), Status::success());
+  // Round 1: per level the geometric flags and the texture edges, 2n independent tasks (level 0's
+  // two halves are the largest; they run side by side). Round 2: per level the merge,
+  // back-projection and subsampling.
+  std::vector<GeometricFlags> geometric(static_cast<size_t>(n));
+  std::vector<TextureEdges> texture(static_cast<size_t>(n));
+  const int tasks = options.texture_edges ? 2 * n : n;
+  cv::parallel_for_(
+      cv::Range(0, tasks),
+      [&](const cv::Range& range) {
+        for (int t = range.start; t < range.end; ++t) {
+          const size_t k = static_cast<size_t>(t / (options.texture_edges ? 2 : 1));
+          if (options.texture_edges && t % 2 == 1) {
+            textureReferenceEdges(levels[k], options, texture[k]);
+          } else {
+            geometric[k] = geometricReferenceFlags(levels[k], options);
+          }
+        }
+      },
+      tasks);
+  for (const TextureEdges& t : texture) VKLOC_TRY_STATUS(t.status);
   cv::parallel_for_(
       cv::Range(0, n),
       [&](const cv::Range& range) {
         for (int k = range.start; k < range.end; ++k) {
-          const ReferenceLevel& level = levels[static_cast<size_t>(k)];
+          const size_t i = static_cast<size_t>(k);
+          const ReferenceLevel& level = levels[i];
           const PinholeCamera level_camera = pyramidCamera(camera, k);
           ImageF32 offsets;
-          auto flags = detectReferenceEdgesImpl(level, options, &offsets);
-          if (!flags.ok()) {
-            status[static_cast<size_t>(k)] = flags.error();
-            continue;
-          }
-          points[static_cast<size_t>(k)] = subsampleEdgePoints(
-              backProjectEdgesImpl(*flags, level.depth, level_camera, options, &offsets), level_camera, options);
+          const ImageU8 flags = mergeReferenceEdges(level, std::move(geometric[i]),
+                                                    options.texture_edges ? &texture[i] : nullptr, &offsets);
+          points[i] = subsampleEdgePoints(backProjectEdgesImpl(flags, level.depth, level_camera, options, &offsets),
+                                          level_camera, options);
         }
       },
       n);
-  for (const Status& st : status) VKLOC_TRY_STATUS(st);
   ref.points = std::move(points[0]);
   for (int k = 1; k < n; ++k) ref.coarse_points.push_back(std::move(points[static_cast<size_t>(k)]));
   return ref;
+}
+
+}  // namespace
+
+Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const PinholeCamera& camera, const Pose& T_world_ref,
+                                         const ReferenceEdgeOptions& options) {
+  VKLOC_TRY_STATUS(validateReferenceView(view, camera, T_world_ref, options));
+  return buildEdgeReferenceFrom(ReferenceLevel{toFloat(view.gray), view.depth, view.normals}, camera, T_world_ref,
+                                options);
+}
+
+Result<EdgeReference> buildEdgeReference(RenderOutput&& view, const PinholeCamera& camera, const Pose& T_world_ref,
+                                         const ReferenceEdgeOptions& options) {
+  VKLOC_TRY_STATUS(validateReferenceView(view, camera, T_world_ref, options));
+  return buildEdgeReferenceFrom(ReferenceLevel{toFloat(view.gray), std::move(view.depth), std::move(view.normals)},
+                                camera, T_world_ref, options);
 }
 
 }  // namespace vkloc

@@ -241,5 +241,9 @@ inline const std::vector<EdgePoint>& edgePointsForLevel(const EdgeReference& ref
 /// kInvalidArgument on bad options, sizes that differ from the camera's or an invalid pose.
 Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const PinholeCamera& camera, const Pose& T_world_ref,
                                          const ReferenceEdgeOptions& options = {});
+/// The same, taking the view's depth and normals over instead of copying them (~5 MB at
+/// 640x480).
+Result<EdgeReference> buildEdgeReference(RenderOutput&& view, const PinholeCamera& camera, const Pose& T_world_ref,
+                                         const ReferenceEdgeOptions& options = {});
 
 }  // namespace vkloc
