@@ -748,35 +748,42 @@ GeometricFlags geometricReferenceFlags(const ReferenceLevel& view, const Referen
   const double ratio = options.depth_jump_ratio;
   const float cos_crease = static_cast<float>(std::cos(options.crease_angle_deg * kPi / 180.0));
   const ImageF32& D = view.depth;
+  const bool creases = options.crease_edges && have_normals;
+  // One pair of 4-neighbours p, q (q right of or below p), row pointers given.
+  auto pair = [&](float zp, float zq, const float* np, const float* nq, uint8_t& fp, uint8_t& fq, uint8_t to_q,
+                  uint8_t to_p, uint8_t crease) {
+    const bool sp = zp > 0 && std::isfinite(zp);
+    const bool sq = zq > 0 && std::isfinite(zq);
+    if (!sp && !sq) return;
+    if (sp != sq || !continuous(zp, zq, ratio)) {
+      if (options.occlusion_edges) {
+        // Background counts as infinitely far: the flag goes on the surface pixel.
+        if (sp && (!sq || zp < zq)) {
+          fp |= to_q;
+        } else {
+          fq |= to_p;
+        }
+      }
+      return;
+    }
+    if (creases && np[0] * nq[0] + np[1] * nq[1] + np[2] * nq[2] < cos_crease) fp |= crease;
+  };
   for (int y = 0; y < h; ++y) {
+    const float* z = &D.data[static_cast<size_t>(y) * w];
+    const float* z_below = y + 1 < h ? z + w : nullptr;
+    const float* n = have_normals ? &view.normals.data[static_cast<size_t>(y) * w * 3] : nullptr;
+    const float* n_below = have_normals && z_below ? n + static_cast<size_t>(w) * 3 : nullptr;
+    uint8_t* f = &flags.data[static_cast<size_t>(y) * w];
+    uint8_t* f_below = z_below ? f + w : nullptr;
     for (int x = 0; x < w; ++x) {
-      const float zp = D.at(x, y);
-      for (int dir = 0; dir < 2; ++dir) {  // 0: right neighbour, 1: neighbour below
-        const int qx = x + (dir == 0);
-        const int qy = y + (dir == 1);
-        if (qx >= w || qy >= h) continue;
-        const float zq = D.at(qx, qy);
-        const bool sp = zp > 0 && std::isfinite(zp);
-        const bool sq = zq > 0 && std::isfinite(zq);
-        if (!sp && !sq) continue;
-        const uint8_t to_q = dir == 0 ? kEdgePixelOcclusionRight : kEdgePixelOcclusionDown;
-        const uint8_t to_p = dir == 0 ? kEdgePixelOcclusionLeft : kEdgePixelOcclusionUp;
-        if (sp != sq || !continuous(zp, zq, ratio)) {
-          if (options.occlusion_edges) {
-            // Background counts as infinitely far: the flag goes on the surface pixel.
-            if (sp && (!sq || zp < zq)) {
-              flags.at(x, y) |= to_q;
-            } else {
-              flags.at(qx, qy) |= to_p;
-            }
-          }
-          continue;
-        }
-        if (options.crease_edges && have_normals) {
-          float dot = 0;
-          for (int c = 0; c < 3; ++c) dot += view.normals.at(x, y, c) * view.normals.at(qx, qy, c);
-          if (dot < cos_crease) flags.at(x, y) |= dir == 0 ? kEdgePixelCreaseRight : kEdgePixelCreaseDown;
-        }
+      const float* np = n ? n + 3 * x : nullptr;
+      if (x + 1 < w) {
+        pair(z[x], z[x + 1], np, np ? np + 3 : nullptr, f[x], f[x + 1], kEdgePixelOcclusionRight,
+             kEdgePixelOcclusionLeft, kEdgePixelCreaseRight);
+      }
+      if (z_below) {
+        pair(z[x], z_below[x], np, n_below ? n_below + 3 * x : nullptr, f[x], f_below[x], kEdgePixelOcclusionDown,
+             kEdgePixelOcclusionUp, kEdgePixelCreaseDown);
       }
     }
   }
