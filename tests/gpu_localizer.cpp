@@ -111,21 +111,29 @@ TEST_F(LocalizerTest, InertialAidingBridgesBlankFramesAndRejectsDisagreeingAlign
   ASSERT_TRUE(moved_view.ok()) << moved_view.error().message;
   const ImageU8 blank(640, 480, 1, 128);
   constexpr int64_t kFrameNs = 50'000'000;
+  // The camera mounted as on the simulated drone (45 deg down, 10 cm ahead of the body), and
+  // without an IMU.
+  Pose T_body_camera = Pose::Identity();
+  T_body_camera.linear() = expSO3(Eigen::Vector3d(0.0, 0.0, -M_PI / 2)) * expSO3(Eigen::Vector3d(-M_PI / 4, 0.0, 0.0));
+  T_body_camera.translation() = Eigen::Vector3d(0.1, 0.0, -0.05);
   for (bool with_imu : {true, false}) {
+    SCOPED_TRACE(with_imu ? "with IMU" : "without IMU");
     LocalizerOptions options;
     options.backend = LocalizerBackend::kCpu;
     options.policy = RerenderPolicy::kEveryFrame;
+    options.inertial.T_body_camera = T_body_camera;
     auto created = Localizer::create(model_, vga(), options, context_);
     ASSERT_TRUE(created.ok()) << created.error().message;
     Localizer& localizer = **created;
     localizer.reset(truth_);
-    // A still camera (body = camera): no rotation rate, the accelerometer reads -R^T g.
+    // A still camera: no rotation rate, the accelerometer reads -R_world_body^T g.
+    const Eigen::Matrix3d R_world_body = (truth_ * T_body_camera.inverse()).linear();
     int64_t t_imu = 0;
     auto feedImu = [&](int64_t until_ns) {
       for (; with_imu && t_imu <= until_ns; t_imu += 5'000'000) {
         ImuSample s;
         s.t_ns = t_imu;
-        s.accel_body = -(truth_.linear().transpose() * Eigen::Vector3d(0.0, 0.0, -9.81));
+        s.accel_body = -(R_world_body.transpose() * Eigen::Vector3d(0.0, 0.0, -9.81));
         ASSERT_TRUE(localizer.addImu(s).ok());
       }
     };
