@@ -275,17 +275,23 @@ TEST(Eval, CountsMissingAndLostFrames) {
   in.frame_times_ns = images;
   const std::vector<int> missing = {3, 4, 10, 11, 17};
   const std::vector<int> lost = {2, 10, 15};
+  const std::vector<int> inertial = {6, 7};  // IMU only: localized, marked
   FrameLog log;
   log.stage_names = {"total_ms"};
   log.stage_ms.resize(1);
   for (int i = 0; i < 20; ++i) {
     if (std::find(missing.begin(), missing.end(), i) == missing.end()) in.estimate.push_back(in.groundtruth[i]);
     log.t_ns.push_back(images[i]);
-    log.state.push_back(std::find(lost.begin(), lost.end(), i) != lost.end() ? "lost" : "tracking");
+    const bool is_lost = std::find(lost.begin(), lost.end(), i) != lost.end();
+    const bool is_inertial = std::find(inertial.begin(), inertial.end(), i) != inertial.end();
+    log.state.push_back(is_lost ? "lost" : (is_inertial ? "inertial" : "tracking"));
     log.stage_ms[0].push_back(10.0);
   }
   in.frame_log = log;
   const EvalResult r = evaluate(in);
+  ASSERT_EQ(r.inertial.size(), 2u);
+  EXPECT_EQ(r.inertial[1].t_ns, images[7]);
+  EXPECT_EQ(r.state_counts.at("inertial"), 2u);
   EXPECT_EQ(r.reference_source, "sequence images");
   EXPECT_EQ(r.reference_frames, 20u);
   ASSERT_EQ(r.not_estimated.size(), 5u);
@@ -298,7 +304,7 @@ TEST(Eval, CountsMissingAndLostFrames) {
   EXPECT_DOUBLE_EQ(r.lost_fraction, 0.15);
   EXPECT_DOUBLE_EQ(r.localized_fraction, 13.0 / 20.0);  // 15 estimated, 2 of them lost
   EXPECT_EQ(r.state_counts.at("lost"), 3u);
-  EXPECT_EQ(r.state_counts.at("tracking"), 17u);
+  EXPECT_EQ(r.state_counts.at("tracking"), 15u);
   EXPECT_EQ(r.frames[2].state, "lost");  // estimate of image 2
   EXPECT_EQ(r.frames[3].state, "tracking");
 

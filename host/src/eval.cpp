@@ -521,11 +521,13 @@ Result<EvalResult> evaluateTrajectory(const EvalInput& input, const EvalOptions&
   size_t localized = 0;
   for (int64_t t : ref) {
     const bool estimated = nearestIndex(est_t, t, max_diff_ns) >= 0;
-    bool is_lost = false;
+    bool is_lost = false, is_inertial = false;
     if (input.frame_log && !input.frame_log->state.empty()) {
       const long k = nearestIndex(input.frame_log->t_ns, t, max_diff_ns);
       is_lost = k >= 0 && input.frame_log->state[k] == "lost";
+      is_inertial = k >= 0 && input.frame_log->state[k] == "inertial";
     }
+    if (is_inertial) r.inertial.push_back(markFrame(input.groundtruth, gt_t, t, max_gap_ns, max_diff_ns));
     if (!estimated) r.not_estimated.push_back(markFrame(input.groundtruth, gt_t, t, max_gap_ns, max_diff_ns));
     if (is_lost) r.lost.push_back(markFrame(input.groundtruth, gt_t, t, max_gap_ns, max_diff_ns));
     if (estimated && !is_lost) ++localized;

@@ -239,6 +239,7 @@ const equalAxes={id:'equalAxes',afterLayout(c){
 const topSets=[line('ground truth',pts(D.gt_xy),'#1f77b4',2),
   Object.assign(line('estimate',gaps(pts(D.est_xy),D.est_t),'#ff7f0e',1.2),{pointRadius:1.5})];
 if(D.lost_xy.length)topSets.push(markers('lost',pts(D.lost_xy),'#d62728'));
+if(D.inertial_xy.length)topSets.push(markers('IMU only',pts(D.inertial_xy),'#bcbd22','rect'));
 if(D.not_estimated_xy.length)topSets.push(markers('not estimated',pts(D.not_estimated_xy),'#7f7f7f','triangle'));
 const topOpts=opts('x (m)','y (m)',{aspectRatio:1});
 topOpts.scales.x.ticks={includeBounds:false};topOpts.scales.y.ticks={includeBounds:false};
@@ -247,6 +248,7 @@ function overTime(id,label,values,aligned,alignedLabel,unit,color){
   const sets=[line(label,gaps(pts(D.t.map((t,i)=>[t,values[i]])),D.t),color)];
   if(aligned)sets.push(line(alignedLabel,gaps(pts(D.t.map((t,i)=>[t,aligned[i]])),D.t),'#2ca02c',1));
   if(D.lost_t.length)sets.push(markers('lost',mark(D.lost_t,0),'#d62728'));
+  if(D.inertial_t.length)sets.push(markers('IMU only',mark(D.inertial_t,0),'#bcbd22','rect'));
   if(D.not_estimated_t.length)sets.push(markers('not estimated',mark(D.not_estimated_t,0),'#7f7f7f','triangle'));
   chart(id,{type:'scatter',data:{datasets:sets},options:opts('time (s)',unit)});}
 overTime('terr','translation error',D.terr,D.aligned_terr,'after SE(3) alignment','error (m)','#1f77b4');
@@ -386,6 +388,8 @@ std::string evalReportJson(const EvalResult& r, const ReportInfo& info) {
                  {"lost", r.lost.size()},
                  {"lost_fraction", r.lost_fraction},
                  {"lost_t_ns", markedJson(r.lost)},
+                 {"inertial", r.inertial.size()},
+                 {"inertial_t_ns", markedJson(r.inertial)},
                  {"state_counts", states}};
   j["ate"] = {{"translation_m", statsJson(r.translation_m)},
               {"rotation_deg", statsJson(r.rotation_deg)},
@@ -469,6 +473,7 @@ std::string evalReportHtml(const EvalResult& r, const ReportInfo& info, const st
     }
   };
   marked(r.lost, d["lost_xy"], d["lost_t"]);
+  marked(r.inertial, d["inertial_xy"], d["inertial_t"]);
   marked(r.not_estimated, d["not_estimated_xy"], d["not_estimated_t"]);
   json t = json::array(), te = json::array(), re = json::array(), ate = json::array(), are = json::array();
   json axis = json::array({json::array(), json::array(), json::array()});
@@ -532,10 +537,10 @@ std::string evalReportHtml(const EvalResult& r, const ReportInfo& info, const st
   h += "<h2>Summary</h2>\n";
   h += fmt::format(
       "<p><span class=\"big\">{}</span> of {} reference frames ({}) localized; not estimated {} ({}), lost {} "
-      "({}).<br>{} estimates, {} with ground truth ({} interpolated), {} without.</p>\n",
+      "({}), from the IMU alone {}.<br>{} estimates, {} with ground truth ({} interpolated), {} without.</p>\n",
       htmlEscape(pct(r.localized_fraction)), r.reference_frames, htmlEscape(r.reference_source), r.not_estimated.size(),
-      htmlEscape(pct(r.not_estimated_fraction)), r.lost.size(), htmlEscape(pct(r.lost_fraction)), r.estimates,
-      r.matched, r.interpolated, r.unmatched_t_ns.size());
+      htmlEscape(pct(r.not_estimated_fraction)), r.lost.size(), htmlEscape(pct(r.lost_fraction)), r.inertial.size(),
+      r.estimates, r.matched, r.interpolated, r.unmatched_t_ns.size());
   h += "<table>\n<tr><th>error</th><th>n</th><th>mean</th><th>median</th><th>rmse</th><th>max</th><th>std</th></tr>\n";
   for (const auto& row : statsRows(r)) {
     const ErrorStats& s = *row.stats;

@@ -15,7 +15,8 @@
 // - Time, required: `t_ns` (integer nanoseconds) or `timestamp` (seconds, decimal, as in TUM
 //   files; up to 9 decimals are kept exactly). Times must strictly increase.
 // - `state`, optional: free text, compared in lower case. "tracking" is a localized frame,
-//   "lost" a frame the tracker flags as lost; any other value (e.g. "initializing") is counted
+//   "lost" a frame the tracker flags as lost, "inertial" a frame whose pose came from the IMU
+//   alone (localized, marked in the report); any other value (e.g. "initializing") is counted
 //   under its own name.
 // - Every column whose name ends in `_ms` is a per-stage time in milliseconds; `total_ms` is the
 //   whole frame. Empty, "nan" or "-" fields mean "not measured" and are left out of statistics.
@@ -143,6 +144,7 @@ struct EvalResult {
   size_t reference_frames = 0;                 ///< Number of reference frames.
   std::vector<MarkedFrame> not_estimated;      ///< Reference frames with no estimate within max_time_diff.
   std::vector<MarkedFrame> lost;               ///< Reference frames flagged "lost" in the frames log.
+  std::vector<MarkedFrame> inertial;           ///< Reference frames flagged "inertial" (IMU only, localized).
   double not_estimated_fraction = 0.0;         ///< not_estimated / reference_frames.
   double lost_fraction = 0.0;                  ///< lost / reference_frames.
   double localized_fraction = 0.0;             ///< Frames estimated and not flagged lost / reference_frames.
