@@ -594,7 +594,7 @@ void GpuEdgeStages::Impl::recordFront(int level) {
     dispatch(kSelect, level, push, 1);
   }
   mark("threshold");
-  dispatch(kNms, level, push, gx, gy);
+  dispatch(kNms, level, push, groups(groups(push.width, span), 8), groups(push.height, 8));
   mark("nms");
   L.hysteresis_passes = 0;
   recordHysteresis(level, kHysteresisBatch);
