@@ -575,7 +575,7 @@ void GpuEdgeStages::Impl::recordFront(int level) {
     dispatch(kConvert, level, push, gx, gy);
     mark("upload");
   } else {
-    dispatch(kPyramid, level, push, gx, gy);
+    dispatch(kPyramid, level, push, groups(groups(push.width, span), 8), groups(push.height, 8));
     mark("pyramid");
   }
   dispatch(kSobel, level, push, groups(groups(push.width, span), 8), groups(push.height, 8));
