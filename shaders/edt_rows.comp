@@ -18,8 +18,9 @@ layout(set = 0, binding = EDGE_BINDING_SEED_A, r32ui) readonly uniform uimage2D 
 layout(set = 0, binding = EDGE_BINDING_DISTANCE, r32f) writeonly uniform image2D distance_px;
 
 void main() {
+  // Spans numbered row by row; the grid may be 2D when a 1D one would exceed 65535 groups.
   int spans = (pc.width + kSpan - 1) / kSpan;
-  int id = int(gl_GlobalInvocationID.x);
+  int id = int(gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x);
   int y = id / spans;
   if (y >= pc.height) return;
   int x0 = (id - y * spans) * kSpan;

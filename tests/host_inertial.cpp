@@ -147,6 +147,48 @@ TEST(InertialPredictor, NoPredictionWithoutEnoughFixesOrReadings) {
   EXPECT_FALSE(late.predict(start + 5 * kFramePeriodNs).has_value());
 }
 
+TEST(InertialPredictor, NoPredictionAcrossAReadingGapOrFromAStaleWindow) {
+  const SplineTrajectory trajectory = droneFlight(6);
+  const std::vector<ImuSample> imu = simulateImu(trajectory, std::nullopt, kGravity, 6);
+  const int64_t start = 1'000'000'000;
+  auto fixes = [&](InertialPredictor& p) {
+    for (int i = 0; i < 5; ++i) {
+      p.addFix(start + i * kFramePeriodNs, trajectory.evaluate(start + i * kFramePeriodNs).T_world_body);
+    }
+  };
+  // Readings 0.15 s missing between the fixes: a gap above max_reading_gap_s (0.1 s).
+  InertialPredictor gap;
+  for (const ImuSample& s : imu) {
+    if (s.t_ns < start + 50'000'000 || s.t_ns > start + 200'000'000) {
+      ASSERT_TRUE(gap.addImu(s).ok());
+    }
+    if (s.t_ns > start + 400'000'000) break;
+  }
+  fixes(gap);
+  EXPECT_FALSE(gap.predict(start + 6 * kFramePeriodNs).has_value());
+  InertialOptions wide;
+  wide.max_reading_gap_s = 0.2;
+  InertialPredictor bridged(wide);
+  for (const ImuSample& s : imu) {
+    if (s.t_ns < start + 50'000'000 || s.t_ns > start + 200'000'000) {
+      ASSERT_TRUE(bridged.addImu(s).ok());
+    }
+    if (s.t_ns > start + 400'000'000) break;
+  }
+  fixes(bridged);
+  EXPECT_TRUE(bridged.predict(start + 6 * kFramePeriodNs).has_value());
+  // Readings going on for longer than buffer_s after the window: the window is dropped.
+  InertialOptions short_buffer;
+  short_buffer.buffer_s = 2.0;
+  InertialPredictor stale(short_buffer);
+  size_t k = 0;
+  for (; k < imu.size() && imu[k].t_ns <= start + 5 * kFramePeriodNs; ++k) ASSERT_TRUE(stale.addImu(imu[k]).ok());
+  fixes(stale);
+  EXPECT_EQ(stale.fixCount(), 5u);
+  for (; k < imu.size() && imu[k].t_ns <= start + 3'000'000'000; ++k) ASSERT_TRUE(stale.addImu(imu[k]).ok());
+  EXPECT_EQ(stale.fixCount(), 0u);
+}
+
 TEST(InertialPredictor, BadReadingsAndOptionsAreErrors) {
   InertialPredictor predictor;
   ImuSample s;
@@ -183,6 +225,9 @@ TEST(InertialPredictor, BadReadingsAndOptionsAreErrors) {
   EXPECT_FALSE(validateInertialOptions(o).ok());
   o = InertialOptions{};
   o.buffer_s = 1.0;  // shorter than window_s
+  EXPECT_FALSE(validateInertialOptions(o).ok());
+  o = InertialOptions{};
+  o.max_reading_gap_s = 0;
   EXPECT_FALSE(validateInertialOptions(o).ok());
 }
 

@@ -622,7 +622,10 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
   if (distance_method == GpuDistanceMethod::kSeparable) {
     dispatch(kEdtColumns, level, push, groups(push.width, 64));
     mark("edt columns");
-    dispatch(kEdtRows, level, push, groups(groups(push.width, 8) * push.height, 64));
+    // One invocation per 8-pixel row span; groups laid out 2D past the 65535 limit of one axis.
+    const uint32_t row_groups = groups(static_cast<int>(groups(push.width, 8)) * push.height, 64);
+    const uint32_t row_gx = std::min<uint32_t>(row_groups, 65535);
+    dispatch(kEdtRows, level, push, row_gx, (row_groups + row_gx - 1) / row_gx);
     mark("distance transform");
     dispatch(kDistanceGradient, level, push, sx, sy);
     mark("distance gradient");

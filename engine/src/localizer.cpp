@@ -172,7 +172,7 @@ struct Localizer::Impl {
     out.render_ms += msSince(t0);
     t0 = Clock::now();
     const double depth_m = medianDepth(view->depth);
-    // The render's depth and normals move into the reference's level 0 (no 5 MB copy).
+    // The render's depth and normals are handed to the reference stage (no 5 MB copy).
     Result<EdgeReference> ref = buildEdgeReference(std::move(*view), camera, T_world_camera, options.reference);
     if (!ref.ok()) return ref.error();
     if (kind_dropped[1] || kind_dropped[2] || kind_dropped[3]) {
@@ -553,6 +553,12 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
     if (inertial) {
       out.state = TrackingState::kInertial;
       out.T_world_camera = *T_world_camera_inertial;
+      // The inertial pose carries the motion on: should the prediction expire (max_inertial_s),
+      // the constant-velocity guess continues from it, not from the last visual pose.
+      m.prev_pose = m.last_pose;
+      m.prev_pose_t_ns = m.last_pose_t_ns;
+      m.last_pose = *T_world_camera_inertial;
+      m.last_pose_t_ns = t_ns;
       // The last accepted frame's rotation uncertainty (gyro drift over max_inertial_s is far
       // below it), the prediction's in translation.
       out.covariance = Matrix6d::Zero();

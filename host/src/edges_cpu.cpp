@@ -410,10 +410,8 @@ void truncatedDistanceTransform(const ImageU8& edges, float truncation_px, float
   }
 }
 
-/// computeDistanceField into `field`, reusing its memory and the scratch; with with_gradient
-/// false the gradient is sized but not written (computeDistanceGradient fills it).
-Status computeDistanceFieldInto(const ImageU8& edges, float truncation_px, DistanceField& field, DistanceScratch& sc,
-                                bool with_gradient = true) {
+/// computeDistanceField into `field`, reusing its memory and the scratch.
+Status computeDistanceFieldInto(const ImageU8& edges, float truncation_px, DistanceField& field, DistanceScratch& sc) {
   if (edges.empty() || edges.channels != 1 || edges.data.size() != static_cast<size_t>(edges.width) * edges.height) {
     return makeError(ErrorCode::kInvalidArgument, "computeDistanceField: expected a non-empty single-channel edge map");
   }
@@ -455,7 +453,7 @@ Status computeDistanceFieldInto(const ImageU8& edges, float truncation_px, Dista
       for (float& d : field.distance.data) d = std::min(d, t);
     }
   }
-  if (with_gradient) computeDistanceGradient(field);
+  computeDistanceGradient(field);
   return Status::success();
 }
 
@@ -576,10 +574,10 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
     status[static_cast<size_t>(level)] =
         detectEdgesImpl(grays[static_cast<size_t>(level)], options.detector, sc.gradients, sc.edges);
   };
-  auto fieldOf = [&](int level, bool with_gradient) {
+  auto fieldOf = [&](int level) {
     LevelScratch& sc = scratch[static_cast<size_t>(level)];
     status[static_cast<size_t>(built + level)] = computeDistanceFieldInto(
-        sc.edges, options.truncation_px, frame.levels[static_cast<size_t>(level)].field, sc.distance, with_gradient);
+        sc.edges, options.truncation_px, frame.levels[static_cast<size_t>(level)].field, sc.distance);
   };
   auto linesOf = [&](int level) {
     LevelScratch& sc = scratch[static_cast<size_t>(level)];
@@ -603,13 +601,13 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
             for (int level = 1; level < built; ++level) {
               edgesOf(level);
               if (!status[static_cast<size_t>(level)].ok()) continue;
-              fieldOf(level, true);
+              fieldOf(level);
             }
           });
   for (const Status& st : status) VKLOC_TRY_STATUS(st);
   twoWays(
       [&] {
-        fieldOf(0, true);
+        fieldOf(0);
         for (int level = 1; level < built; ++level) linesOf(level);
       },
       [&] { linesOf(0); });

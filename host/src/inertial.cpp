@@ -23,12 +23,12 @@ Status validateInertialOptions(const InertialOptions& o) {
     return makeError(ErrorCode::kInvalidArgument, "inertial: need 2 <= min_fixes <= window_fixes <= 10000");
   }
   if (!finiteIn(o.window_s, 1e-3, 1e4) || !finiteIn(o.buffer_s, o.window_s, 1e5) ||
-      !finiteIn(o.max_extrapolation_s, 0.0, 10.0) || !finiteIn(o.accel_sigma, 0.0, 1e3) ||
-      !finiteIn(o.min_fix_sigma_m, 0.0, 1e3)) {
+      !finiteIn(o.max_extrapolation_s, 0.0, 10.0) || !finiteIn(o.max_reading_gap_s, 1e-6, 1e3) ||
+      !finiteIn(o.accel_sigma, 0.0, 1e3) || !finiteIn(o.min_fix_sigma_m, 0.0, 1e3)) {
     return makeError(ErrorCode::kInvalidArgument,
-                     "inertial: need window_s in [1e-3, 1e4], buffer_s in [window_s, 1e5], max_extrapolation_s in [0, "
-                     "10], accel_sigma in "
-                     "[0, 1e3] and min_fix_sigma_m in [0, 1e3]");
+                     "inertial: need window_s in [1e-3, 1e4], buffer_s in [window_s, 1e5], max_extrapolation_s in "
+                     "[0, 10], max_reading_gap_s in [1e-6, 1e3], accel_sigma in [0, 1e3] and min_fix_sigma_m in "
+                     "[0, 1e3]");
   }
   return Status::success();
 }
@@ -43,9 +43,10 @@ Status InertialPredictor::addImu(const ImuSample& sample) {
                                                       std::to_string(imu_.back().t_ns) + " ns");
   }
   imu_.push_back(sample);
-  // Readings older than the oldest fix are dropped by addFix; a bound for long stretches
-  // without fixes.
+  // Readings before the oldest fix are dropped by addFix. A bound for long stretches without
+  // fixes: a window older than buffer_s is dropped with the readings it would need.
   const int64_t keep_ns = static_cast<int64_t>(options_.buffer_s * 1e9);
+  if (!fixes_.empty() && fixes_.front().t_ns < sample.t_ns - keep_ns) fixes_.clear();
   while (imu_.size() > 2 && imu_[1].t_ns < sample.t_ns - keep_ns) imu_.pop_front();
   return Status::success();
 }
@@ -72,6 +73,14 @@ std::optional<InertialPrediction> InertialPredictor::predict(int64_t t_ns) const
   const int64_t t_last = fixes_.back().t_ns;
   if (t_ns <= t_last || imu_.front().t_ns > t0) return std::nullopt;
   if (seconds(t_ns - imu_.back().t_ns) > options_.max_extrapolation_s) return std::nullopt;
+  // Readings must cover t0 .. t_ns without a gap (the one at or before t0 included).
+  {
+    size_t i = 0;
+    while (i + 1 < imu_.size() && imu_[i + 1].t_ns <= t0) ++i;
+    for (; i + 1 < imu_.size() && imu_[i].t_ns < t_ns; ++i) {
+      if (seconds(imu_[i + 1].t_ns - imu_[i].t_ns) > options_.max_reading_gap_s) return std::nullopt;
+    }
+  }
 
   // Readings at arbitrary times: linear between samples, held after the last one.
   size_t k = 0;  // first sample with time > the last query

@@ -27,11 +27,14 @@ struct InertialOptions {
   int window_fixes = 20;                           ///< Most recent fixes in the velocity fit (>= 2).
   double window_s = 1.5;                           ///< Fixes older than this before the newest are dropped, seconds.
   int min_fixes = 4;                               ///< No prediction from fewer fixes (>= 2).
-  /// Readings older than this before the newest are dropped (also those before the oldest
-  /// fix), seconds (>= window_s).
+  /// Readings older than this before the newest are dropped, and so are fixes (a window that old
+  /// predicts nothing useful); readings before the oldest fix always are. Seconds, >= window_s.
   double buffer_s = 30.0;
   /// Prediction up to this long after the newest IMU sample is allowed (readings held), seconds.
   double max_extrapolation_s = 0.02;
+  /// No prediction across a gap between consecutive readings longer than this (dropped IMU
+  /// data is not bridged by interpolation), seconds.
+  double max_reading_gap_s = 0.1;
   /// 1-sigma of an acceleration error (bias, orientation) growing the position uncertainty as
   /// 0.5 sigma dt^2 after the newest fix, m/s^2.
   double accel_sigma = 0.05;
