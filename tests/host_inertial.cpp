@@ -156,27 +156,24 @@ TEST(InertialPredictor, NoPredictionAcrossAReadingGapOrFromAStaleWindow) {
       p.addFix(start + i * kFramePeriodNs, trajectory.evaluate(start + i * kFramePeriodNs).T_world_body);
     }
   };
-  // Readings 0.15 s missing between the fixes: a gap above max_reading_gap_s (0.1 s).
-  InertialPredictor gap;
-  for (const ImuSample& s : imu) {
-    if (s.t_ns < start + 50'000'000 || s.t_ns > start + 200'000'000) {
-      ASSERT_TRUE(gap.addImu(s).ok());
+  // Readings 0.15 s missing between the fixes: a gap above max_reading_gap_s (0.1 s), refused;
+  // bridged with max_reading_gap_s 0.2 s.
+  auto predictAcrossGap = [&](const InertialOptions& options) {
+    InertialPredictor p(options);
+    for (const ImuSample& s : imu) {
+      const bool in_gap = s.t_ns >= start + 50'000'000 && s.t_ns <= start + 200'000'000;
+      if (!in_gap) {
+        EXPECT_TRUE(p.addImu(s).ok());
+      }
+      if (s.t_ns > start + 400'000'000) break;
     }
-    if (s.t_ns > start + 400'000'000) break;
-  }
-  fixes(gap);
-  EXPECT_FALSE(gap.predict(start + 6 * kFramePeriodNs).has_value());
+    fixes(p);
+    return p.predict(start + 6 * kFramePeriodNs).has_value();
+  };
+  EXPECT_FALSE(predictAcrossGap(InertialOptions{}));
   InertialOptions wide;
   wide.max_reading_gap_s = 0.2;
-  InertialPredictor bridged(wide);
-  for (const ImuSample& s : imu) {
-    if (s.t_ns < start + 50'000'000 || s.t_ns > start + 200'000'000) {
-      ASSERT_TRUE(bridged.addImu(s).ok());
-    }
-    if (s.t_ns > start + 400'000'000) break;
-  }
-  fixes(bridged);
-  EXPECT_TRUE(bridged.predict(start + 6 * kFramePeriodNs).has_value());
+  EXPECT_TRUE(predictAcrossGap(wide));
   // Readings going on for longer than buffer_s after the window: the window is dropped.
   InertialOptions short_buffer;
   short_buffer.buffer_s = 2.0;
