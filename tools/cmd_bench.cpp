@@ -181,8 +181,7 @@ void runTrackBench(const TrackBenchArgs& a) {
     LocalizerOptions options;
     options.backend = take(parseLocalizerBackend(backend));
     options.policy = take(parseRerenderPolicy(a.policy));
-    options.inertial.T_body_camera = seq.camera.T_body_camera;
-    options.inertial.predictor.gravity_world = seq.gravity_world;
+    setSequenceInertial(seq, true, options);
     TrackBenchRun run;
     const auto t0 = std::chrono::steady_clock::now();
     auto localizer = take(Localizer::create(model, camera, options, context));
@@ -193,9 +192,7 @@ void runTrackBench(const TrackBenchArgs& a) {
       size_t next_imu = 0;
       for (size_t i = 0; i < n; ++i) {
         const int64_t t_ns = seq.images[i].t_ns;
-        for (; next_imu < seq.imu.size() && seq.imu[next_imu].t_ns <= t_ns; ++next_imu) {
-          (void)localizer->addImu(seq.imu[next_imu]);  // a bad reading is skipped, as in `vkloc track`
-        }
+        next_imu = feedSequenceImu(seq, next_imu, t_ns, *localizer);
         const LocalizationResult r = take(localizer->localize(t_ns, images[i]));
         if (pass < 0) {
           if (i == 0) run.first_frame_ms = r.total_ms;

@@ -87,10 +87,8 @@ void run(const TrackArgs& a) {
     throw Failure{fmt::format("--motion '{}': expected constant-velocity or last-pose", a.motion)};
   }
   // Inertial aiding from the sequence's IMU readings (body frame) and camera mounting.
-  const bool use_imu = !a.no_imu && !seq.imu.empty();
-  options.inertial.enabled = use_imu;
-  options.inertial.T_body_camera = seq.camera.T_body_camera;
-  options.inertial.predictor.gravity_world = seq.gravity_world;
+  setSequenceInertial(seq, !a.no_imu, options);
+  const bool use_imu = options.inertial.enabled;
   const Pose T_init = initialPose(seq, a.init_offset);
 
   const Model model = loadSequenceModel(seq);
@@ -136,11 +134,7 @@ void run(const TrackArgs& a) {
   for (size_t i = 0; i < total; ++i) {
     const ImageEntry& entry = seq.images[i];
     ImageU8 gray = take(readImageU8(seq.imagePath(i), 1));
-    for (; use_imu && next_imu < seq.imu.size() && seq.imu[next_imu].t_ns <= entry.t_ns; ++next_imu) {
-      // A bad reading is skipped (the predictor keeps the others); say so once per reading.
-      const Status st = localizer->addImu(seq.imu[next_imu]);
-      if (!st.ok()) std::fprintf(stderr, "warning: imu.csv reading %zu: %s\n", next_imu, st.error().message.c_str());
-    }
+    if (use_imu) next_imu = feedSequenceImu(seq, next_imu, entry.t_ns, *localizer);
     Result<LocalizationResult> r = localizer->localize(entry.t_ns, gray);
     if (!r.ok()) throw Failure{fmt::format("{}: frame {}: {}", seq.imagePath(i), i, r.error().message)};
     const LocalizationResult& f = *r;

@@ -154,6 +154,20 @@ Pose initialPose(const Sequence& seq, const std::string& offset) {
   return T;
 }
 
+void setSequenceInertial(const Sequence& seq, bool use_imu, LocalizerOptions& options) {
+  options.inertial.enabled = use_imu && !seq.imu.empty();
+  options.inertial.T_body_camera = seq.camera.T_body_camera;
+  options.inertial.predictor.gravity_world = seq.gravity_world;
+}
+
+size_t feedSequenceImu(const Sequence& seq, size_t next, int64_t t_ns, Localizer& localizer) {
+  for (; next < seq.imu.size() && seq.imu[next].t_ns <= t_ns; ++next) {
+    const Status st = localizer.addImu(seq.imu[next]);
+    if (!st.ok()) std::fprintf(stderr, "warning: imu.csv reading %zu: %s\n", next, st.error().message.c_str());
+  }
+  return next;
+}
+
 PinholeCamera sequenceCamera(const Sequence& seq) {
   if (seq.camera.model != "pinhole") {
     throw Failure{fmt::format("{}/camera.yaml: camera model '{}' is not supported yet (pinhole only)", seq.directory,

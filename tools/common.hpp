@@ -9,6 +9,7 @@
 
 #include "vkloc/camera.hpp"
 #include "vkloc/gpu.hpp"
+#include "vkloc/localizer.hpp"
 #include "vkloc/model.hpp"
 #include "vkloc/pose.hpp"
 
@@ -79,6 +80,13 @@ PinholeCamera sequenceCamera(const Sequence& seq);
 /// `offset` = "dx,dy,dz,rx,ry,rz" (metres along world axes, degrees about camera axes; "" =
 /// none); throws Failure.
 Pose initialPose(const Sequence& seq, const std::string& offset);
+/// Inertial aiding from the sequence: on when it has IMU readings and `use_imu`, with its camera
+/// mounting and gravity.
+void setSequenceInertial(const Sequence& seq, bool use_imu, LocalizerOptions& options);
+/// Gives the localizer the sequence's IMU readings from index `next` up to and including
+/// t_ns; returns the index of the first reading not given. A bad reading is skipped with a
+/// warning on stderr (the others are kept).
+size_t feedSequenceImu(const Sequence& seq, size_t next, int64_t t_ns, Localizer& localizer);
 /// Runs `vkloc track` with these arguments (used by `vkloc demo`); throws Failure on errors.
 void runTrackArguments(const std::vector<std::string>& arguments);
 
