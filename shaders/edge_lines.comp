@@ -7,16 +7,24 @@
 // strict <) decides them.
 // Writes (s, n_u, n_v, 0): n the unit intensity-gradient normal at p, s = n . (q - e) in pixels;
 // (0, 0, 0, 0) where no edge point is that near or when pc.flags is 0 (sub-pixel edges off).
-// A pixel whose distance to the nearest edge pixel (DISTANCE, written before this pass) is at
-// least the radius + 0.7072 px has no candidate (an edge point lies within |t d| <= 0.5 sqrt(2)
-// of its pixel) and skips the scan: most pixels, so the pass costs ~a tenth on lavapipe.
+// A span whose pixels are all at least the radius + 0.7072 px from the nearest edge pixel
+// (DISTANCE, written before this pass) has no candidate (an edge point lies within
+// |t d| <= 0.5 sqrt(2) of its pixel) and skips the scan: most spans.
 // Each invocation does kSpan consecutive pixels of a row (specialization constant: 8 on CPU
-// drivers, where the 5 x (kSpan + 4) window is read once for all of them; 1 on GPUs); the
-// window is scanned in row-major order, so every pixel sees its candidates in the same order.
+// drivers, 1 on GPUs). The window of 5 rows x (kSpan + 4) columns is read one row at a time,
+// without branches (a position that is no edge gets a far point), and each output pixel then
+// tests only its own 5 columns of that row: 25 candidates per pixel, visited in row-major order,
+// where testing every window position against every output costs kSpan + 4 times more.
 #extension GL_GOOGLE_include_directive : require
 #include "edge_layout.h"
 
 layout(constant_id = 1) const int kSpan = 1;
+// Rows per invocation: specialization constant 2 (1 on GPUs; 8 on CPU drivers, where every 8
+// invocations run as one coroutine whose set-up costs about as much as a light kernel's work).
+layout(constant_id = 2) const int kRows = 1;
+const int kR = 2;  // ceil(EDGE_LINE_RADIUS_PX)
+const int kCols = kSpan + 2 * kR;
+const float kFar = 1.0e4;  // point of a window position that is no edge: never within the radius
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(push_constant) uniform Push { EdgePush pc; };
 layout(set = 0, binding = EDGE_BINDING_STATE, r32ui) readonly uniform uimage2D state;
@@ -24,41 +32,65 @@ layout(set = 0, binding = EDGE_BINDING_EPOINTS, rgba32f) readonly uniform image2
 layout(set = 0, binding = EDGE_BINDING_LINES, rgba32f) writeonly uniform image2D lines;
 layout(set = 0, binding = EDGE_BINDING_DISTANCE, r32f) readonly uniform image2D distance_px;
 
-void main() {
-  int x0 = int(gl_GlobalInvocationID.x) * kSpan;
-  int qy = int(gl_GlobalInvocationID.y);
-  if (x0 >= pc.width || qy >= pc.height) return;
-  const int r = int(ceil(EDGE_LINE_RADIUS_PX));
-  vec4 out_line[kSpan];
-  float best[kSpan];
-  bool wanted[kSpan];
+void pixelRow(int x0, int qy) {
+  float best[kSpan];  // squared distance of the nearest edge point so far, pixels^2
+  int best_x[kSpan];  // its edge pixel, -1 = none
+  int best_y[kSpan];
+  // Loads are unconditional (clamped), the tests branch-free: lavapipe turns a load under a
+  // divergent condition into a slow masked one.
   bool any = false;
   for (int j = 0; j < kSpan; ++j) {
-    out_line[j] = vec4(0.0);
     best[j] = EDGE_LINE_RADIUS_PX * EDGE_LINE_RADIUS_PX;
-    wanted[j] = pc.flags != 0u && x0 + j < pc.width &&
-                imageLoad(distance_px, ivec2(x0 + j, qy)).x < EDGE_LINE_RADIUS_PX + 0.7072;
-    any = any || wanted[j];
+    best_x[j] = -1;
+    best_y[j] = 0;
+    float distance = imageLoad(distance_px, ivec2(min(x0 + j, pc.width - 1), qy)).x;
+    any = any || (x0 + j < pc.width) && (distance < EDGE_LINE_RADIUS_PX + 0.7072);
   }
+  any = any && pc.flags != 0u;
   if (any) {
-    for (int y = max(qy - r, 1); y <= min(qy + r, pc.height - 2); ++y) {
-      for (int x = max(x0 - r, 1); x <= min(x0 + kSpan - 1 + r, pc.width - 2); ++x) {
-        if (imageLoad(state, ivec2(x, y)).x != 2u) continue;
-        vec4 point = imageLoad(epoints, ivec2(x, y));  // written by edge_nms.comp
-        if (point.z == 0.0 && point.w == 0.0) continue;  // zero gradient: no normal
-        for (int j = 0; j < kSpan; ++j) {
-          int qx = x0 + j;
-          if (!wanted[j] || abs(x - qx) > r) continue;
-          precise vec2 o = vec2(qx, qy) - point.xy;
+    for (int i = 0; i <= 2 * kR; ++i) {
+      int y = qy - kR + i;
+      bool row_inside = y >= 1 && y <= pc.height - 2;  // edge pixels are interior
+      int yc = clamp(y, 0, pc.height - 1);
+      vec2 e[kCols];
+      for (int c = 0; c < kCols; ++c) {
+        int x = x0 - kR + c;
+        ivec2 p = ivec2(clamp(x, 0, pc.width - 1), yc);
+        vec4 point = imageLoad(epoints, p);  // only meaningful at an edge pixel
+        uint pixel_state = imageLoad(state, p).x;
+        bool edge = row_inside && x >= 1 && x <= pc.width - 2 && pixel_state == 2u &&
+                    (point.z != 0.0 || point.w != 0.0);  // zero gradient: no normal
+        e[c] = edge ? point.xy : vec2(kFar);
+      }
+      for (int j = 0; j < kSpan; ++j) {
+        for (int k = 0; k <= 2 * kR; ++k) {
+          precise vec2 o = vec2(x0 + j, qy) - e[j + k];
           precise float d2 = o.x * o.x + o.y * o.y;
-          if (d2 >= best[j]) continue;
-          best[j] = d2;
-          out_line[j] = vec4(point.z * o.x + point.w * o.y, point.z, point.w, 0.0);
+          bool nearer = d2 < best[j];
+          best[j] = nearer ? d2 : best[j];
+          best_x[j] = nearer ? x0 - kR + j + k : best_x[j];
+          best_y[j] = nearer ? y : best_y[j];
         }
       }
     }
   }
   for (int j = 0; j < kSpan; ++j) {
-    if (x0 + j < pc.width) imageStore(lines, ivec2(x0 + j, qy), out_line[j]);
+    if (x0 + j >= pc.width) break;
+    vec4 line = vec4(0.0);
+    if (best_x[j] >= 0) {
+      vec4 point = imageLoad(epoints, ivec2(best_x[j], best_y[j]));
+      precise vec2 o = vec2(x0 + j, qy) - point.xy;
+      line = vec4(point.z * o.x + point.w * o.y, point.z, point.w, 0.0);
+    }
+    imageStore(lines, ivec2(x0 + j, qy), line);
+  }
+}
+
+void main() {
+  int x0 = int(gl_GlobalInvocationID.x) * kSpan;
+  for (int r = 0; r < kRows; ++r) {
+    int qy = int(gl_GlobalInvocationID.y) * kRows + r;
+    if (x0 >= pc.width || qy >= pc.height) return;
+    pixelRow(x0, qy);
   }
 }

@@ -13,6 +13,10 @@
 #include "edge_layout.h"
 
 layout(constant_id = 1) const int kSpan = 1;
+// Rows per invocation (1 on GPUs; 8 on CPU drivers, where every 8 invocations run as one
+// coroutine whose set-up costs about as much as a light kernel's work); the 3-row window of
+// magnitudes slides down them, each row read once.
+layout(constant_id = 2) const int kRows = 1;
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(push_constant) uniform Push { EdgePush pc; };
 layout(set = 0, binding = EDGE_BINDING_MAG, r32f) readonly uniform image2D mag;
@@ -24,18 +28,16 @@ layout(std430, set = 0, binding = EDGE_BINDING_CANDIDATES) writeonly buffer Cand
 
 float m(int x, int y) { return imageLoad(mag, ivec2(clamp(x, 0, pc.width - 1), clamp(y, 0, pc.height - 1))).x; }
 
-void main() {
-  int x0 = int(gl_GlobalInvocationID.x) * kSpan;
-  int y = int(gl_GlobalInvocationID.y);
+// Magnitudes of columns x0 - 1 .. x0 + kSpan (clamped) of rows y - 1, y, y + 1, slid down one
+// row per output row.
+float top[kSpan + 2], mid[kSpan + 2], bot[kSpan + 2];
+
+// Classifies pixels x0 .. x0 + kSpan - 1 of row y (top/mid/bot hold rows y - 1 .. y + 1);
+// returns the weak candidates (bit j: x0 + j).
+uint pixelRow(int x0, int y) {
   bool row_inside = y < pc.height && x0 < pc.width;
   uint weak_bits = 0u;  // bit j: pixel x0 + j is a weak candidate
   if (row_inside) {
-    float top[kSpan + 2], mid[kSpan + 2], bot[kSpan + 2];
-    for (int i = 0; i < kSpan + 2; ++i) {
-      top[i] = m(x0 - 1 + i, y - 1);
-      mid[i] = m(x0 - 1 + i, y);
-      bot[i] = m(x0 - 1 + i, y + 1);
-    }
     float low = ctl.low, high = ctl.high;
     for (int j = 0; j < kSpan; ++j) {
       ivec2 p = ivec2(x0 + j, y);
@@ -76,19 +78,38 @@ void main() {
           imageStore(epoints, p, vec4(e, n));
         }
       }
-      imageStore(state, p, uvec4(s));
+      if (s != 0u) imageStore(state, p, uvec4(s));  // STATE is cleared to 0 before this pass
       if (s == 1u) weak_bits |= 1u << uint(j);
     }
   }
-  // The weak candidates into the list: one atomic per subgroup.
-  uint count = bitCount(weak_bits);
-  uint total = subgroupAdd(count);
-  if (total == 0u) return;
-  uint offset = subgroupExclusiveAdd(count);
-  uint base = 0u;
-  if (subgroupElect()) base = atomicAdd(ctl.candidate_count, total);
-  base = subgroupBroadcastFirst(base) + offset;
-  for (int j = 0; j < kSpan; ++j) {
-    if ((weak_bits & (1u << uint(j))) != 0u) candidates[base++] = uint(x0 + j) | (uint(y) << 16);
+  return weak_bits;
+}
+
+void main() {
+  int x0 = int(gl_GlobalInvocationID.x) * kSpan;
+  int y0 = int(gl_GlobalInvocationID.y) * kRows;
+  for (int i = 0; i < kSpan + 2; ++i) {
+    top[i] = m(x0 - 1 + i, y0 - 1);
+    mid[i] = m(x0 - 1 + i, y0);
+  }
+  for (int r = 0; r < kRows; ++r) {
+    int y = y0 + r;
+    for (int i = 0; i < kSpan + 2; ++i) bot[i] = m(x0 - 1 + i, y + 1);
+    uint weak_bits = pixelRow(x0, y);
+    for (int i = 0; i < kSpan + 2; ++i) {
+      top[i] = mid[i];
+      mid[i] = bot[i];
+    }
+    // The weak candidates into the list: one atomic per subgroup (its invocations share y).
+    uint count = bitCount(weak_bits);
+    uint total = subgroupAdd(count);
+    if (total == 0u) continue;
+    uint offset = subgroupExclusiveAdd(count);
+    uint base = 0u;
+    if (subgroupElect()) base = atomicAdd(ctl.candidate_count, total);
+    base = subgroupBroadcastFirst(base) + offset;
+    for (int j = 0; j < kSpan; ++j) {
+      if ((weak_bits & (1u << uint(j))) != 0u) candidates[base++] = uint(x0 + j) | (uint(y) << 16);
+    }
   }
 }

@@ -12,24 +12,22 @@
 
 layout(constant_id = 0) const int kRadius = 19;
 const int kSpan = 8;
+// Rows per invocation: specialization constant 2 (1 on GPUs; 8 on CPU drivers, where every 8
+// invocations run as one coroutine whose set-up costs about as much as a light kernel's work).
+layout(constant_id = 2) const int kRows = 1;
 layout(local_size_x = 64) in;
 layout(push_constant) uniform Push { EdgePush pc; };
 layout(set = 0, binding = EDGE_BINDING_SEED_A, r32ui) readonly uniform uimage2D g2;
 layout(set = 0, binding = EDGE_BINDING_DISTANCE, r32f) writeonly uniform image2D distance_px;
 
-void main() {
-  // Spans numbered row by row; the grid may be 2D when a 1D one would exceed 65535 groups.
-  int spans = (pc.width + kSpan - 1) / kSpan;
-  int id = int(gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x);
-  int y = id / spans;
-  if (y >= pc.height) return;
-  int x0 = (id - y * spans) * kSpan;
+void pixelRow(int x0, int y) {
   uint far2 = uint((kRadius + 1) * (kRadius + 1));
   uint best[kSpan];
   for (int j = 0; j < kSpan; ++j) best[j] = 0xffffffffu;
   for (int i = 0; i < kSpan + 2 * kRadius; ++i) {
     int x = x0 - kRadius + i;
-    uint v = (x >= 0 && x < pc.width) ? imageLoad(g2, ivec2(x, y)).x : far2;
+    uint loaded = imageLoad(g2, ivec2(clamp(x, 0, pc.width - 1), y)).x;  // unconditional: see edge_lines.comp
+    uint v = (x >= 0 && x < pc.width) ? loaded : far2;
     for (int j = 0; j < kSpan; ++j) {
       int dx = i - kRadius - j;
       best[j] = min(best[j], v + uint(dx * dx));
@@ -39,5 +37,19 @@ void main() {
     if (x0 + j < pc.width) {
       imageStore(distance_px, ivec2(x0 + j, y), vec4(min(sqrt(float(best[j])), pc.truncation_px)));
     }
+  }
+}
+
+void main() {
+  // Invocations numbered along the spans of a row, then by block of kRows rows; the grid may be
+  // 2D when a 1D one would exceed 65535 groups.
+  int spans = (pc.width + kSpan - 1) / kSpan;
+  int id = int(gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x);
+  int block = id / spans;
+  int x0 = (id - block * spans) * kSpan;
+  for (int r = 0; r < kRows; ++r) {
+    int y = block * kRows + r;
+    if (y >= pc.height) return;
+    pixelRow(x0, y);
   }
 }

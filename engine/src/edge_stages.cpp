@@ -67,24 +67,31 @@ enum Kernel : int {
 struct KernelSpec {
   const char* shader;
   int mode;  // specialization constant 0 (reduce_edges.comp, jfa_step.comp), -1 = none
+  // Specialization constant 2 of the per-pixel kernels: rows per invocation on a GPU and on a
+  // CPU driver (0: the kernel has no such constant). lavapipe runs every 8 invocations as one
+  // coroutine whose set-up cost is about that of a light kernel's work (measured: dispatching
+  // the edge-lines kernel with nothing to do, 8 x 8 groups of one row each over the three
+  // levels, cost 1.6 ms of a frame; with a sixteenth of the invocations, 0.4 ms).
+  int rows_gpu = 0;
+  int rows_cpu = 0;
 };
 // KernelSpec::mode of edt_rows.comp: constant 0 is the separable transform's radius R.
 constexpr int kModeEdtRadius = -2;
-constexpr KernelSpec kKernels[kKernelCount] = {{"edge_convert.comp", -1},
-                                               {"pyramid_down.comp", -1},
-                                               {"edge_sobel.comp", -1},
+constexpr KernelSpec kKernels[kKernelCount] = {{"edge_convert.comp", -1, 1, 16},
+                                               {"pyramid_down.comp", -1, 1, 16},
+                                               {"edge_sobel.comp", -1, 1, 16},
                                                {"edge_hist.comp", -1},
                                                {"edge_select.comp", -1},
-                                               {"edge_nms.comp", -1},
+                                               {"edge_nms.comp", -1, 1, 16},
                                                {"edge_hysteresis.comp", -1},
                                                {"jfa_init.comp", -1},
                                                {"jfa_step.comp", 0},
                                                {"jfa_step.comp", 1},
                                                {"edge_distance.comp", -1},
                                                {"edt_columns.comp", -1},
-                                               {"edt_rows.comp", kModeEdtRadius},
-                                               {"edge_dgrad.comp", -1},
-                                               {"edge_lines.comp", -1},
+                                               {"edt_rows.comp", kModeEdtRadius, 1, 16},
+                                               {"edge_dgrad.comp", -1, 1, 16},
+                                               {"edge_lines.comp", -1, 1, 16},
                                                {"reduce_edges.comp", 0},
                                                {"reduce_edges.comp", 1},
                                                {"edge_scale.comp", -1}};
@@ -161,6 +168,11 @@ struct GpuEdgeStages::Impl {
   // Pixels per invocation of the Sobel, distance-gradient and edge-lines kernels: 8 on CPU
   // drivers (one window read serves 8 pixels: lavapipe gathers lane by lane), 1 on GPUs.
   int32_t span = 1;
+  bool cpu_driver = false;
+  /// Rows per invocation of kernel k (KernelSpec::rows_gpu / rows_cpu), >= 1.
+  int32_t rowsPerInvocation(Kernel k) const {
+    return std::max(cpu_driver ? kKernels[k].rows_cpu : kKernels[k].rows_gpu, 1);
+  }
 
   DeviceHandle<VkDescriptorSetLayout> set_layout;
   DeviceHandle<VkDescriptorPool> descriptor_pool;
@@ -190,11 +202,17 @@ struct GpuEdgeStages::Impl {
   Status submit();
   void mark(const char* stage);
   void dispatch(Kernel k, int level, const EdgePush& push, uint32_t gx, uint32_t gy = 1);
+  /// A row-span kernel over the level (push.width x push.height): 8 x 8 workgroups of
+  /// invocations of `span` pixels across and rowsPerInvocation(k) rows.
+  void dispatchSpans(Kernel k, int level, const EdgePush& push) {
+    dispatch(k, level, push, groups(static_cast<int>(groups(push.width, span)), 8),
+             groups(push.height, 8 * rowsPerInvocation(k)));
+  }
   EdgePush levelPush(int level) const;
   void recordFront(int level);
   void recordHysteresis(int level, int passes);
   void recordDistance(int level);
-  void recordEdgeLines(int level, EdgePush push, uint32_t sx, uint32_t sy);
+  void recordEdgeLines(int level, EdgePush push);
   Status checkTracking(const Pose& T_camera_ref, int level) const;
   /// Normal equations: the per-workgroup partial sums of the last normal-equation pass, added.
   EdgeNormalEquations summedPartials() const {
@@ -210,12 +228,13 @@ struct GpuEdgeStages::Impl {
 
 Result<engine::Image> GpuEdgeStages::Impl::storageImage(int w, int h, VkFormat format) {
   return ctx->createImage(static_cast<uint32_t>(w), static_cast<uint32_t>(h), format,
-                          VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
+                          VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                          VK_IMAGE_ASPECT_COLOR_BIT);
 }
 
 Status GpuEdgeStages::Impl::init() {
   device = ctx->device;
-  const bool cpu_driver = ctx->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  cpu_driver = ctx->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
   wide_groups = cpu_driver ? kGridGroups : kWideGridGroups;
   span = cpu_driver ? 8 : 1;
   for (VkFormat f :
@@ -384,12 +403,13 @@ Status GpuEdgeStages::Impl::init() {
     // R = ceil(truncation) - 1 for the separable transform (unused by jump flooding).
     const int32_t edt_radius =
         std::clamp(static_cast<int32_t>(std::ceil(options.truncation_px)) - 1, 0, int32_t{EDGE_EDT_MAX_RADIUS});
-    // Constant 0: the kernel's mode; 1: pixels per invocation of the row-span kernels (ignored
-    // by shaders that declare no such constant).
-    const int32_t constants[2] = {kKernels[k].mode == kModeEdtRadius ? edt_radius : std::max(kKernels[k].mode, 0),
-                                  span};
-    const VkSpecializationMapEntry entries[2] = {{0, 0, sizeof(int32_t)}, {1, sizeof(int32_t), sizeof(int32_t)}};
-    VkSpecializationInfo spec{2, entries, sizeof(constants), constants};
+    // Constant 0: the kernel's mode; 1: pixels per invocation of the row-span kernels; 2: their
+    // rows per invocation (constants a shader does not declare are ignored).
+    const int32_t constants[3] = {kKernels[k].mode == kModeEdtRadius ? edt_radius : std::max(kKernels[k].mode, 0), span,
+                                  rowsPerInvocation(static_cast<Kernel>(k))};
+    const VkSpecializationMapEntry entries[3] = {
+        {0, 0, sizeof(int32_t)}, {1, sizeof(int32_t), sizeof(int32_t)}, {2, 2 * sizeof(int32_t), sizeof(int32_t)}};
+    VkSpecializationInfo spec{3, entries, sizeof(constants), constants};
     VkComputePipelineCreateInfo cpci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
     cpci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
     cpci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
@@ -570,17 +590,21 @@ void GpuEdgeStages::Impl::dispatch(Kernel k, int level, const EdgePush& push, ui
 void GpuEdgeStages::Impl::recordFront(int level) {
   Level& L = levels[level];
   EdgePush push = levelPush(level);
-  const uint32_t gx = groups(push.width, 16), gy = groups(push.height, 16);
   if (level == 0) {
-    dispatch(kConvert, level, push, gx, gy);
+    dispatch(kConvert, level, push, groups(push.width, 16), groups(push.height, 16 * rowsPerInvocation(kConvert)));
     mark("upload");
   } else {
-    dispatch(kPyramid, level, push, groups(groups(push.width, span), 8), groups(push.height, 8));
+    dispatchSpans(kPyramid, level, push);
     mark("pyramid");
   }
-  dispatch(kSobel, level, push, groups(groups(push.width, span), 8), groups(push.height, 8));
+  dispatchSpans(kSobel, level, push);
   mark("sobel");
   vkCmdFillBuffer(cmd, L.hist.buffer.get(), 0, VK_WHOLE_SIZE, 0);
+  // NMS writes only the pixels it keeps (a store costs lavapipe ~50 instructions per pixel,
+  // the clear is a fill).
+  const VkClearColorValue zero{};
+  const VkImageSubresourceRange whole{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  vkCmdClearColorImage(cmd, L.state.image.get(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &whole);
   vkCmdFillBuffer(cmd, L.control.buffer.get(), 0, VK_WHOLE_SIZE, 0);
   computeBarrier(cmd);
   const uint64_t n = static_cast<uint64_t>((push.width + 1) / 2) * ((push.height + 1) / 2);
@@ -594,7 +618,7 @@ void GpuEdgeStages::Impl::recordFront(int level) {
     dispatch(kSelect, level, push, 1);
   }
   mark("threshold");
-  dispatch(kNms, level, push, groups(groups(push.width, span), 8), groups(push.height, 8));
+  dispatchSpans(kNms, level, push);
   mark("nms");
   L.hysteresis_passes = 0;
   recordHysteresis(level, kHysteresisBatch);
@@ -617,19 +641,20 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
   Level& L = levels[level];
   EdgePush push = levelPush(level);
   const uint32_t gx = groups(push.width, 16), gy = groups(push.height, 16);
-  // Row-span kernels: 8 x 8 invocations of `span` pixels each.
-  const uint32_t sx = groups(groups(push.width, span), 8), sy = groups(push.height, 8);
   if (distance_method == GpuDistanceMethod::kSeparable) {
     dispatch(kEdtColumns, level, push, groups(push.width, 64));
     mark("edt columns");
-    // One invocation per 8-pixel row span; groups laid out 2D past the 65535 limit of one axis.
-    const uint32_t row_groups = groups(static_cast<int>(groups(push.width, 8)) * push.height, 64);
+    // One invocation per 8-pixel row span and block of rows; groups laid out 2D past the 65535
+    // limit of one axis.
+    const uint32_t row_groups = groups(
+        static_cast<int>(groups(push.width, 8)) * static_cast<int>(groups(push.height, rowsPerInvocation(kEdtRows))),
+        64);
     const uint32_t row_gx = std::min<uint32_t>(row_groups, 65535);
     dispatch(kEdtRows, level, push, row_gx, (row_groups + row_gx - 1) / row_gx);
     mark("distance transform");
-    dispatch(kDistanceGradient, level, push, sx, sy);
+    dispatchSpans(kDistanceGradient, level, push);
     mark("distance gradient");
-    recordEdgeLines(level, push, sx, sy);
+    recordEdgeLines(level, push);
     mark("edge lines");
     return;
   }
@@ -653,16 +678,16 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
   mark("jfa");
   push.flags = in_b ? 1u : 0u;
   dispatch(kDistance, level, push, gx, gy);
-  dispatch(kDistanceGradient, level, push, sx, sy);
+  dispatchSpans(kDistanceGradient, level, push);
   mark("distance+gradient");
-  recordEdgeLines(level, push, sx, sy);
+  recordEdgeLines(level, push);
   mark("edge lines");
 }
 
 // Edge lines of a level (edge_lines.comp).
-void GpuEdgeStages::Impl::recordEdgeLines(int level, EdgePush push, uint32_t sx, uint32_t sy) {
+void GpuEdgeStages::Impl::recordEdgeLines(int level, EdgePush push) {
   push.flags = options.subpixel_edges ? 1u : 0u;
-  dispatch(kEdgeLines, level, push, sx, sy);
+  dispatchSpans(kEdgeLines, level, push);
 }
 
 GpuEdgeStages::GpuEdgeStages(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
