@@ -3,7 +3,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "edge_layout.h"
 
-// Rows per invocation: specialization constant 2 (1 on GPUs; 8 on CPU drivers, where every 8
+// Rows per invocation: specialization constant 2 (1 on GPUs; 16 on CPU drivers, where every 8
 // invocations run as one coroutine whose set-up costs about as much as a light kernel's work).
 layout(constant_id = 2) const int kRows = 1;
 layout(local_size_x = 16, local_size_y = 16) in;

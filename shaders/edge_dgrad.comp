@@ -1,12 +1,12 @@
 #version 450
 // Distance gradient (G_u, G_v) as computeDistanceField: central differences inside, one-sided
 // on the border, 0 where the pixel or a neighbour used is truncated. Each invocation does kSpan
-// consecutive pixels of a row (specialization constant: 8 on CPU drivers, 1 on GPUs).
+// consecutive pixels of kRows rows (specialization constants: 8 and 16 on CPU drivers, 1 on GPUs).
 #extension GL_GOOGLE_include_directive : require
 #include "edge_layout.h"
 
 layout(constant_id = 1) const int kSpan = 1;
-// Rows per invocation (1 on GPUs; 8 on CPU drivers, where every 8 invocations run as one
+// Rows per invocation (1 on GPUs; 16 on CPU drivers, where every 8 invocations run as one
 // coroutine whose set-up costs about as much as a light kernel's work); the 3-row window slides
 // down them, each input row read once.
 layout(constant_id = 2) const int kRows = 1;

@@ -19,7 +19,7 @@
 #include "edge_layout.h"
 
 layout(constant_id = 1) const int kSpan = 1;
-// Rows per invocation: specialization constant 2 (1 on GPUs; 8 on CPU drivers, where every 8
+// Rows per invocation: specialization constant 2 (1 on GPUs; 16 on CPU drivers, where every 8
 // invocations run as one coroutine whose set-up costs about as much as a light kernel's work).
 layout(constant_id = 2) const int kRows = 1;
 const int kR = 2;  // ceil(EDGE_LINE_RADIUS_PX)

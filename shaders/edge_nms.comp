@@ -5,15 +5,15 @@
 // For every kept pixel also its sub-pixel edge point for edge_lines.comp (EPOINTS): the parabola
 // vertex of the magnitude along the quantised direction d, e = p + t d with |t| <= 1/2, and the
 // unit gradient normal n, as (e_u, e_v, n_u, n_v); other pixels' values are never read.
-// Each invocation does kSpan consecutive pixels of a row (specialization constant: 8 on CPU
-// drivers, where the 3 x (kSpan + 2) magnitudes are read once; 1 on GPUs).
+// Each invocation does kSpan consecutive pixels of kRows rows (specialization constant: 8 on CPU
+// drivers, where the 3 x (kSpan + 2) magnitudes slide down the rows; 1 on GPUs).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #include "edge_layout.h"
 
 layout(constant_id = 1) const int kSpan = 1;
-// Rows per invocation (1 on GPUs; 8 on CPU drivers, where every 8 invocations run as one
+// Rows per invocation (1 on GPUs; 16 on CPU drivers, where every 8 invocations run as one
 // coroutine whose set-up costs about as much as a light kernel's work); the 3-row window of
 // magnitudes slides down them, each row read once.
 layout(constant_id = 2) const int kRows = 1;

@@ -1,13 +1,13 @@
 #version 450
 // 3x3 Sobel divided by 8 (gray levels per pixel), borders replicated, and its magnitude.
 // Each invocation does kSpan consecutive pixels of kRows consecutive rows (specialization
-// constants: 8 x 8 on CPU drivers, where a 3 x (kSpan + 2) window slid down the rows replaces
+// constants: 8 x 16 on CPU drivers, where a 3 x (kSpan + 2) window slid down the rows replaces
 // 8 gathers per pixel; 1 x 1 on GPUs).
 #extension GL_GOOGLE_include_directive : require
 #include "edge_layout.h"
 
 layout(constant_id = 1) const int kSpan = 1;
-// Rows per invocation (1 on GPUs; 8 on CPU drivers, where every 8 invocations run as one
+// Rows per invocation (1 on GPUs; 16 on CPU drivers, where every 8 invocations run as one
 // coroutine whose set-up costs about as much as a light kernel's work).
 layout(constant_id = 2) const int kRows = 1;
 layout(local_size_x = 8, local_size_y = 8) in;

@@ -12,7 +12,7 @@
 
 layout(constant_id = 0) const int kRadius = 19;
 const int kSpan = 8;
-// Rows per invocation: specialization constant 2 (1 on GPUs; 8 on CPU drivers, where every 8
+// Rows per invocation: specialization constant 2 (1 on GPUs; 16 on CPU drivers, where every 8
 // invocations run as one coroutine whose set-up costs about as much as a light kernel's work).
 layout(constant_id = 2) const int kRows = 1;
 layout(local_size_x = 64) in;

@@ -8,7 +8,7 @@
 #include "edge_layout.h"
 
 layout(constant_id = 1) const int kSpan = 1;
-// Rows per invocation: specialization constant 2 (1 on GPUs; 8 on CPU drivers, where every 8
+// Rows per invocation: specialization constant 2 (1 on GPUs; 16 on CPU drivers, where every 8
 // invocations run as one coroutine whose set-up costs about as much as a light kernel's work).
 layout(constant_id = 2) const int kRows = 1;
 layout(local_size_x = 8, local_size_y = 8) in;
