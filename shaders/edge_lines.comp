@@ -7,9 +7,14 @@
 // strict <) decides them.
 // Writes (s, n_u, n_v, 0): n the unit intensity-gradient normal at p, s = n . (q - e) in pixels;
 // (0, 0, 0, 0) where no edge point is that near or when pc.flags is 0 (sub-pixel edges off).
-// A span whose pixels are all at least the radius + 0.7072 px from the nearest edge pixel
+// A span whose pixels are all at least EDGE_LINE_NEAR_PX from the nearest edge pixel
 // (DISTANCE, written before this pass) has no candidate (an edge point lies within
 // |t d| <= 0.5 sqrt(2) of its pixel) and skips the scan: most spans.
+// Two ways over the image (EdgePush::flags bit EDGE_LINES_LISTED):
+// - dense: every span, writing zeros where there is no candidate (jump flooding on GPUs);
+// - listed: only the near-edge spans edt_rows.comp listed (separable transform, CPU drivers).
+//   LINES keeps stale values at the other pixels, which are all at least EDGE_LINE_NEAR_PX from
+//   an edge: readers mask LINES with DISTANCE there (reduce_edges.comp, readLiveFrame).
 // Each invocation does kSpan consecutive pixels of a row (specialization constant: 8 on CPU
 // drivers, 1 on GPUs). The window of 5 rows x (kSpan + 4) columns is read one row at a time,
 // without branches (a position that is no edge gets a far point), and each output pixel then
@@ -32,21 +37,28 @@ layout(set = 0, binding = EDGE_BINDING_EPOINTS, rgba32f) readonly uniform image2
 layout(set = 0, binding = EDGE_BINDING_LINES, rgba32f) writeonly uniform image2D lines;
 layout(set = 0, binding = EDGE_BINDING_DISTANCE, r32f) readonly uniform image2D distance_px;
 
-void pixelRow(int x0, int qy) {
+layout(std430, set = 0, binding = EDGE_BINDING_CONTROL) readonly buffer Control { EdgeControl ctl; };
+layout(std430, set = 0, binding = EDGE_BINDING_CANDIDATES) readonly buffer Spans { uint spans[]; };
+
+// Pixels x0 .. x0 + kSpan - 1 of row qy; `listed`: the caller knows a pixel nearby is near an
+// edge (its span is listed), so the distance test is skipped.
+void pixelRow(int x0, int qy, bool listed) {
   float best[kSpan];  // squared distance of the nearest edge point so far, pixels^2
   int best_x[kSpan];  // its edge pixel, -1 = none
   int best_y[kSpan];
   // Loads are unconditional (clamped), the tests branch-free: lavapipe turns a load under a
   // divergent condition into a slow masked one.
-  bool any = false;
+  bool any = listed;
   for (int j = 0; j < kSpan; ++j) {
     best[j] = EDGE_LINE_RADIUS_PX * EDGE_LINE_RADIUS_PX;
     best_x[j] = -1;
     best_y[j] = 0;
-    float distance = imageLoad(distance_px, ivec2(min(x0 + j, pc.width - 1), qy)).x;
-    any = any || (x0 + j < pc.width) && (distance < EDGE_LINE_RADIUS_PX + 0.7072);
+    if (!listed) {
+      float distance = imageLoad(distance_px, ivec2(min(x0 + j, pc.width - 1), qy)).x;
+      any = any || (x0 + j < pc.width) && (distance < EDGE_LINE_NEAR_PX);
+    }
   }
-  any = any && pc.flags != 0u;
+  any = any && (pc.flags & 1u) != 0u;
   if (any) {
     for (int i = 0; i <= 2 * kR; ++i) {
       int y = qy - kR + i;
@@ -87,10 +99,26 @@ void pixelRow(int x0, int qy) {
 }
 
 void main() {
+  if ((pc.flags & EDGE_LINES_LISTED) != 0u) {
+    // Only the near-edge spans of edt_rows.comp's list, grid-stride over pc.group_count groups;
+    // the rest of LINES is stale (masked by its readers). Where edges are sparse this keeps
+    // every lane of a CPU driver's 8-wide coroutine busy, where the dense pass below runs the
+    // scan for a whole 8-invocation row as soon as one of them is near an edge.
+    uint count = ctl.line_span_count;
+    uint stride = 64u * pc.group_count;
+    for (uint i = gl_WorkGroupID.x * 64u + gl_LocalInvocationIndex; i < count; i += stride) {
+      uint s = spans[i];
+      int y = int(s >> 16);
+      for (int x = int(s & 0xffffu); x < min(int(s & 0xffffu) + EDGE_LINE_SPAN, pc.width); x += kSpan) {
+        pixelRow(x, y, true);
+      }
+    }
+    return;
+  }
   int x0 = int(gl_GlobalInvocationID.x) * kSpan;
   for (int r = 0; r < kRows; ++r) {
     int qy = int(gl_GlobalInvocationID.y) * kRows + r;
     if (x0 >= pc.width || qy >= pc.height) return;
-    pixelRow(x0, qy);
+    pixelRow(x0, qy, false);
   }
 }

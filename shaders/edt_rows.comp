@@ -6,12 +6,16 @@
 // R = ceil(truncation) - 1 is a specialization constant, so the inner loop unrolls). Terms
 // with |dx| > R are >= (R + 1)^2 >= truncation^2 and can only give the clamped value, so every
 // window position is added to every pixel without a range test. Writes the distance, clamped
-// to the truncation.
+// to the truncation. Appends every span with a pixel nearer than EDGE_LINE_NEAR_PX to
+// an edge pixel (a pixel whose edge line edge_lines.comp may fill) to the span list
+// (CANDIDATES, counted in line_span_count), so that edge_lines.comp need not visit the rest.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "edge_layout.h"
 
 layout(constant_id = 0) const int kRadius = 19;
-const int kSpan = 8;
+const int kSpan = EDGE_LINE_SPAN;
 // Rows per invocation: specialization constant 2 (1 on GPUs; 16 on CPU drivers, where every 8
 // invocations run as one coroutine whose set-up costs about as much as a light kernel's work).
 layout(constant_id = 2) const int kRows = 1;
@@ -19,6 +23,8 @@ layout(local_size_x = 64) in;
 layout(push_constant) uniform Push { EdgePush pc; };
 layout(set = 0, binding = EDGE_BINDING_SEED_A, r32ui) readonly uniform uimage2D g2;
 layout(set = 0, binding = EDGE_BINDING_DISTANCE, r32f) writeonly uniform image2D distance_px;
+layout(std430, set = 0, binding = EDGE_BINDING_CONTROL) buffer Control { EdgeControl ctl; };
+layout(std430, set = 0, binding = EDGE_BINDING_CANDIDATES) writeonly buffer Spans { uint spans[]; };
 
 void pixelRow(int x0, int y) {
   uint far2 = uint((kRadius + 1) * (kRadius + 1));
@@ -33,11 +39,23 @@ void pixelRow(int x0, int y) {
       best[j] = min(best[j], v + uint(dx * dx));
     }
   }
+  bool near = false;
   for (int j = 0; j < kSpan; ++j) {
     if (x0 + j < pc.width) {
-      imageStore(distance_px, ivec2(x0 + j, y), vec4(min(sqrt(float(best[j])), pc.truncation_px)));
+      float distance = min(sqrt(float(best[j])), pc.truncation_px);
+      imageStore(distance_px, ivec2(x0 + j, y), vec4(distance));
+      near = near || distance < EDGE_LINE_NEAR_PX;  // the test of edge_lines.comp
     }
   }
+  // Into the span list: one atomic per subgroup.
+  uint count = near ? 1u : 0u;
+  uint total = subgroupAdd(count);
+  if (total == 0u) return;
+  uint offset = subgroupExclusiveAdd(count);
+  uint base = 0u;
+  if (subgroupElect()) base = atomicAdd(ctl.line_span_count, total);
+  base = subgroupBroadcastFirst(base) + offset;
+  if (near) spans[base] = uint(x0) | (uint(y) << 16);
 }
 
 void main() {

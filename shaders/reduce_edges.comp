@@ -50,6 +50,7 @@ void main() {
     ivec2 q = ivec2(0);
     float w00 = 0.0, w10 = 0.0, w01 = 0.0, w11 = 0.0;
     float r_distance = 0.0;
+    float d_max = 0.0;  // largest of the four distances, pixels
     if (valid) {
       q = ivec2(int(u), int(v));
       float a = u - float(q.x), b = v - float(q.y);
@@ -58,6 +59,7 @@ void main() {
       float d01 = imageLoad(distance_px, q + ivec2(0, 1)).x;
       float d11 = imageLoad(distance_px, q + ivec2(1, 1)).x;
       valid = !(d00 >= trunc || d10 >= trunc || d01 >= trunc || d11 >= trunc);
+      d_max = max(max(d00, d10), max(d01, d11));
       w00 = (1.0 - a) * (1.0 - b);
       w10 = a * (1.0 - b);
       w01 = (1.0 - a) * b;
@@ -71,7 +73,9 @@ void main() {
       vec3 l10 = imageLoad(lines, q + ivec2(1, 0)).xyz;
       vec3 l01 = imageLoad(lines, q + ivec2(0, 1)).xyz;
       vec3 l11 = imageLoad(lines, q + ivec2(1, 1)).xyz;
-      on_line = (l00.y != 0.0 || l00.z != 0.0) && dot(l10.yz, l00.yz) > 0.8 && dot(l01.yz, l00.yz) > 0.8 &&
+      // LINES is stale where DISTANCE >= EDGE_LINE_NEAR_PX (edge_lines.comp's listed path);
+      // a pixel with a normal there is impossible, so the test changes nothing elsewhere.
+      on_line = d_max < EDGE_LINE_NEAR_PX && (l00.y != 0.0 || l00.z != 0.0) && dot(l10.yz, l00.yz) > 0.8 && dot(l01.yz, l00.yz) > 0.8 &&
                 dot(l11.yz, l00.yz) > 0.8;
       if (on_line) {
         float s_line = w00 * l00.x + w10 * l10.x + w01 * l01.x + w11 * l11.x;

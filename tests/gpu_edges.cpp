@@ -337,6 +337,65 @@ TEST_F(GpuEdges, ResidualsAndNormalEquationsMatchCpuOnTheSameField) {
   }
 }
 
+// The listed edge-lines path (separable transform) writes LINES only near this frame's edges and
+// leaves the rest as the last frame wrote it; the reads must never see that. A sparse frame (one
+// square) after a dense one (noise: edge lines almost everywhere) must give the CPU's edge lines
+// on read-back and the CPU's residuals on the CPU's own live frame, points up to 4 px from an
+// edge (where the dense frame's lines were).
+TEST_F(GpuEdges, SparseFrameAfterADenseOneSeesNoEarlierEdgeLines) {
+  ImageU8 sparse(320, 240, 1, 20);
+  for (int y = 80; y < 160; ++y) {
+    for (int x = 110; x < 210; ++x) sparse.at(x, y) = 200;
+  }
+  LiveFrameOptions options;
+  options.levels = 2;
+  auto cpu = buildLiveFrame(sparse, qvga(), options);
+  ASSERT_TRUE(cpu.ok());
+  const Pose T_camera_ref = expSE3((Vector6d() << 0.02, -0.01, 0.05, 0.01, -0.02, 0.01).finished());
+  const Pose T_eval =
+      applyLeftIncrement(T_camera_ref, (Vector6d() << 0.004, 0.002, -0.005, 0.001, 0.001, -0.002).finished());
+  for (GpuDistanceMethod method : kBothMethods) {
+    SCOPED_TRACE(gpuDistanceMethodName(method));
+    method_ = method;
+    auto stages = makeStages(qvga(), options);
+    ASSERT_TRUE(stages);
+    ASSERT_TRUE(stages->processLiveImage(randomImage(320, 240, 9)).ok());
+    ASSERT_TRUE(stages->processLiveImage(sparse).ok());
+    auto gpu = stages->readLiveFrame();
+    ASSERT_TRUE(gpu.ok());
+    for (int level = 0; level < 2; ++level) {
+      SCOPED_TRACE(::testing::Message() << "level " << level);
+      const LiveLevel& g = gpu->levels[level];
+      const LiveLevel& c = cpu->levels[level];
+      ASSERT_EQ(differingPixels(g.edges, c.edges), 0);
+      ASSERT_EQ(g.edge_lines.data.size(), c.edge_lines.data.size());
+      double worst_line = 0;
+      for (size_t i = 0; i < c.edge_lines.data.size(); ++i) {
+        worst_line = std::max(worst_line, std::abs(static_cast<double>(g.edge_lines.data[i]) - c.edge_lines.data[i]));
+      }
+      EXPECT_LE(worst_line, 1e-3);
+      const std::vector<EdgePoint> points = pointsNearEdges(c, T_camera_ref, 2000, 21 + level);
+      ASSERT_TRUE(stages->setReference(points).ok());
+      auto gpu_r = stages->residuals(T_eval, level);
+      ASSERT_TRUE(gpu_r.ok()) << gpu_r.error().message;
+      const std::vector<float> cpu_r = evaluateEdgeResiduals(points, T_eval, c);
+      int valid = 0, mismatched = 0;
+      double worst = 0;
+      for (size_t i = 0; i < cpu_r.size(); ++i) {
+        const bool a = (*gpu_r)[i] >= 0, b = cpu_r[i] >= 0;
+        mismatched += a != b;
+        if (a && b) {
+          ++valid;
+          worst = std::max(worst, std::abs(static_cast<double>((*gpu_r)[i]) - cpu_r[i]));
+        }
+      }
+      EXPECT_GT(valid, 1500);
+      EXPECT_EQ(mismatched, 0);
+      EXPECT_LE(worst, 2e-4);
+    }
+  }
+}
+
 TEST_F(GpuEdges, SubpixelEdgeLinesGiveTheDistanceToATiltedStep) {
   // A step edge along the line n . (u, v) = c, n at 20 degrees, c off the pixel grid; pixel
   // values are the area fraction of the pixel on the bright side (box-filtered step). Oracle:

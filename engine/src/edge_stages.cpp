@@ -27,8 +27,9 @@ static_assert(offsetof(EdgePush, pose_row0) == 48);
 static_assert(offsetof(EdgePush, intrinsics) == 96);
 static_assert(offsetof(EdgePush, robust) == 112);
 static_assert(offsetof(EdgeControl, candidate_count) == 20);
-static_assert(offsetof(EdgeControl, changes) == 32);
-static_assert(sizeof(EdgeControl) == 32 + 4 * EDGE_MAX_HYSTERESIS_PASSES);
+static_assert(offsetof(EdgeControl, line_span_count) == 28);
+static_assert(offsetof(EdgeControl, changes) == 48);
+static_assert(sizeof(EdgeControl) == 48 + 4 * EDGE_MAX_HYSTERESIS_PASSES);
 static_assert(sizeof(EdgePoint) == 16);
 static_assert(static_cast<float>(EDGE_LINE_RADIUS_PX) == kEdgeLineRadiusPx);
 
@@ -47,7 +48,6 @@ enum Kernel : int {
   kPyramid,
   kSobel,
   kHist,
-  kSelect,
   kNms,
   kHysteresis,
   kJfaInit,
@@ -81,7 +81,6 @@ constexpr KernelSpec kKernels[kKernelCount] = {{"edge_convert.comp", -1, 1, 16},
                                                {"pyramid_down.comp", -1, 1, 16},
                                                {"edge_sobel.comp", -1, 1, 16},
                                                {"edge_hist.comp", -1},
-                                               {"edge_select.comp", -1},
                                                {"edge_nms.comp", -1, 1, 16},
                                                {"edge_hysteresis.comp", -1},
                                                {"jfa_init.comp", -1},
@@ -212,7 +211,7 @@ struct GpuEdgeStages::Impl {
   void recordFront(int level);
   void recordHysteresis(int level, int passes);
   void recordDistance(int level);
-  void recordEdgeLines(int level, EdgePush push);
+  void recordEdgeLines(int level, EdgePush push, bool listed);
   Status checkTracking(const Pose& T_camera_ref, int level) const;
   /// Normal equations: the per-workgroup partial sums of the last normal-equation pass, added.
   EdgeNormalEquations summedPartials() const {
@@ -615,8 +614,7 @@ void GpuEdgeStages::Impl::recordFront(int level) {
     push.step = pass;
     EdgePush hist_push = push;
     hist_push.group_count = wide_groups;
-    dispatch(kHist, level, hist_push, wide_groups);
-    dispatch(kSelect, level, push, 1);
+    dispatch(kHist, level, hist_push, wide_groups);  // its last workgroup also selects
   }
   mark("threshold");
   dispatchSpans(kNms, level, push);
@@ -655,7 +653,7 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
     mark("distance transform");
     dispatchSpans(kDistanceGradient, level, push);
     mark("distance gradient");
-    recordEdgeLines(level, push);
+    recordEdgeLines(level, push, true);
     mark("edge lines");
     return;
   }
@@ -681,14 +679,30 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
   dispatch(kDistance, level, push, gx, gy);
   dispatchSpans(kDistanceGradient, level, push);
   mark("distance+gradient");
-  recordEdgeLines(level, push);
+  recordEdgeLines(level, push, false);
   mark("edge lines");
 }
 
-// Edge lines of a level (edge_lines.comp).
-void GpuEdgeStages::Impl::recordEdgeLines(int level, EdgePush push) {
+// Edge lines of a level (edge_lines.comp): over every pixel, or (`listed`, after edt_rows.comp
+// listed the near-edge spans) only the listed spans.
+void GpuEdgeStages::Impl::recordEdgeLines(int level, EdgePush push, bool listed) {
   push.flags = options.subpixel_edges ? 1u : 0u;
-  dispatchSpans(kEdgeLines, level, push);
+  if (!listed) {
+    dispatchSpans(kEdgeLines, level, push);
+    return;
+  }
+  if (!options.subpixel_edges) {
+    // Zeros everywhere. (With sub-pixel edges, pixels off the list keep stale values, which
+    // readers mask with the distance: clearing the image cost ~0.9 ms of a frame on lavapipe.)
+    const VkClearColorValue zero{};
+    const VkImageSubresourceRange whole{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    vkCmdClearColorImage(cmd, levels[level].lines.image.get(), VK_IMAGE_LAYOUT_GENERAL, &zero, 1, &whole);
+    computeBarrier(cmd);
+    return;
+  }
+  push.flags |= EDGE_LINES_LISTED;
+  push.group_count = kGridGroups;
+  dispatch(kEdgeLines, level, push, kGridGroups);
 }
 
 GpuEdgeStages::GpuEdgeStages(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -854,8 +868,11 @@ Result<LiveFrame> GpuEdgeStages::readLiveFrame() {
     if (m.options.subpixel_edges) {
       out.edge_lines = ImageF32(w, h, 3);
       const auto* lines = reinterpret_cast<const float*>(base + offsets[k][4]);
+      const float* distance = out.field.distance.data.data();
       for (size_t i = 0; i < n; ++i) {
-        for (int c = 0; c < 3; ++c) out.edge_lines.data[i * 3 + c] = lines[i * 4 + c];
+        // Stale beyond EDGE_LINE_NEAR_PX on the listed path (edge_lines.comp): zero there.
+        const bool near_edge = distance[i] < static_cast<float>(EDGE_LINE_NEAR_PX);
+        for (int c = 0; c < 3; ++c) out.edge_lines.data[i * 3 + c] = near_edge ? lines[i * 4 + c] : 0.0f;
       }
     }
     if (m.options.keep_intermediate) {

@@ -18,19 +18,21 @@ namespace vkloc::engine {
 #endif
 
 // Descriptor bindings of set 0 (one set per pyramid level; every edge shader uses this layout).
-#define EDGE_BINDING_INPUT8 0       // SSBO: 8-bit gray input, 4 pixels per uint, row-major
-#define EDGE_BINDING_GRAY_PREV 1    // r32f: gray of the next finer level (pyramid input)
-#define EDGE_BINDING_GRAY 2         // r32f: gray of this level, 0..255
-#define EDGE_BINDING_MAG 3          // r32f: Sobel/8 gradient magnitude
-#define EDGE_BINDING_GRAD 4         // rg32f: Sobel/8 gradient (gx, gy)
-#define EDGE_BINDING_STATE 5        // r32ui: 0 none, 1 weak candidate, 2 edge
-#define EDGE_BINDING_SEED_A 6       // r32ui: JFA seeds x | y << 16 (~0u none), or edt_columns' g^2
-#define EDGE_BINDING_SEED_B 7       // r32ui: ping-pong partner of SEED_A
-#define EDGE_BINDING_DISTANCE 8     // r32f: truncated distance to the nearest edge, pixels
-#define EDGE_BINDING_DGRAD 9        // rg32f: distance gradient (G_u, G_v)
-#define EDGE_BINDING_HIST 10        // SSBO: uint[EDGE_HIST_BINS] radix-select histogram
-#define EDGE_BINDING_CONTROL 11     // SSBO: EdgeControl
-#define EDGE_BINDING_CANDIDATES 12  // SSBO: uint[] weak candidates, x | y << 16
+#define EDGE_BINDING_INPUT8 0     // SSBO: 8-bit gray input, 4 pixels per uint, row-major
+#define EDGE_BINDING_GRAY_PREV 1  // r32f: gray of the next finer level (pyramid input)
+#define EDGE_BINDING_GRAY 2       // r32f: gray of this level, 0..255
+#define EDGE_BINDING_MAG 3        // r32f: Sobel/8 gradient magnitude
+#define EDGE_BINDING_GRAD 4       // rg32f: Sobel/8 gradient (gx, gy)
+#define EDGE_BINDING_STATE 5      // r32ui: 0 none, 1 weak candidate, 2 edge
+#define EDGE_BINDING_SEED_A 6     // r32ui: JFA seeds x | y << 16 (~0u none), or edt_columns' g^2
+#define EDGE_BINDING_SEED_B 7     // r32ui: ping-pong partner of SEED_A
+#define EDGE_BINDING_DISTANCE 8   // r32f: truncated distance to the nearest edge, pixels
+#define EDGE_BINDING_DGRAD 9      // rg32f: distance gradient (G_u, G_v)
+#define EDGE_BINDING_HIST 10      // SSBO: uint[EDGE_HIST_BINS] radix-select histogram
+#define EDGE_BINDING_CONTROL 11   // SSBO: EdgeControl
+// CANDIDATES holds the weak candidates (NMS -> hysteresis), then the near-edge row spans
+// (edt_rows -> edge_lines).
+#define EDGE_BINDING_CANDIDATES 12  // SSBO: uint[] pixels or spans, x | y << 16
 #define EDGE_BINDING_POINTS 13      // SSBO: EdgePoint[] (vec4: x, y, z metres, kind bits)
 #define EDGE_BINDING_RESIDUALS 14   // SSBO: float[] residual per point (pixels), -1 = invalid
 #define EDGE_BINDING_PARTIALS 15    // SSBO: vec4[group * 8 + k] per-workgroup normal equations
@@ -43,7 +45,14 @@ namespace vkloc::engine {
 #define EDGE_NO_SEED 0xffffffffu
 #define EDGE_EDT_MAX_RADIUS 64   // edt_rows.comp: R = ceil(truncation) - 1 <= this
 #define EDGE_LINE_RADIUS_PX 2.0  // kEdgeLineRadiusPx of edges.hpp, pixels of a level
-#define EDGE_REDUCE_VEC4S 8      // 29 values of the normal equations in 8 vec4s (3 unused)
+// A pixel at least this far from every edge pixel (pixels of a level) has no edge point within
+// EDGE_LINE_RADIUS_PX (an edge point lies within sqrt(2) / 2 of its pixel), so its edge line is
+// (0, 0, 0). On the listed path (edt_rows.comp -> edge_lines.comp) LINES is written only at
+// pixels nearer than this and holds stale values elsewhere: readers mask it with DISTANCE.
+#define EDGE_LINE_NEAR_PX 2.7072
+#define EDGE_LINE_SPAN 8      // pixels per near-edge span of edt_rows.comp's list
+#define EDGE_LINES_LISTED 2u  // EdgePush::flags bit of edge_lines.comp: listed spans only
+#define EDGE_REDUCE_VEC4S 8   // 29 values of the normal equations in 8 vec4s (3 unused)
 
 // Push constants shared by all edge shaders (fields unused by a shader are ignored). 128 bytes.
 struct EdgePush {
@@ -51,7 +60,8 @@ struct EdgePush {
   VKLOC_INT(height);               // Pixels.
   VKLOC_INT(step);                 // JFA step (pixels); histogram / select pass; hysteresis pass slot.
   VKLOC_UINT(flags);               // JFA / distance: 1 = read SEED_B (write SEED_A), 0 = the reverse;
-                                   // edge lines: 1 = build them, 0 = write zeros.
+                                   // edge lines: bit 0 = build them (else write zeros), bit 1 = only
+                                   // the spans listed by edt_rows (EDGE_LINES_LISTED).
   VKLOC_FLOAT(high_factor);        // EdgeDetectorOptions::high_factor.
   VKLOC_FLOAT(min_high_gradient);  // EdgeDetectorOptions::min_high_gradient, gray levels per pixel.
   VKLOC_FLOAT(low_ratio);          // EdgeDetectorOptions::low_ratio.
@@ -76,7 +86,8 @@ struct EdgeControl {
   VKLOC_FLOAT(low);             // Low threshold.
   VKLOC_UINT(candidate_count);  // Weak candidates appended by NMS.
   VKLOC_FLOAT(sigma_px);        // t-distribution scale of the last residuals (edge_scale.comp), pixels.
-  VKLOC_UINT(pad1);
+  VKLOC_UINT(line_span_count);  // Near-edge row spans appended by edt_rows.comp (EDGE_LINE_SPAN px each).
+  VKLOC_UINT(hist_done[4]);     // Radix select: workgroups finished per histogram pass (3 used).
   VKLOC_UINT(changes[EDGE_MAX_HYSTERESIS_PASSES]);  // Pixels promoted per hysteresis pass slot.
 };
 
