@@ -2,7 +2,7 @@
 // Sub-pixel edge lines (LiveLevel::edge_lines, computeEdgeLines in host/src/edges_cpu.cpp) as a
 // gather: pixel q takes the interior edge pixel p within kEdgeLineRadiusPx whose sub-pixel edge
 // point e (EPOINTS, from edge_nms.comp: parabola vertex of the Sobel magnitude along the quantised
-// gradient direction, |offset| <= half a step) is nearest, strictly nearer than the radius; ties
+// gradient direction, |offset| <= half a step; the normal comes from GRAD) is nearest, strictly nearer than the radius; ties
 // go to the first p in row-major order, as the CPU splat (edge pixels in row-major order,
 // strict <) decides them.
 // Writes (s, n_u, n_v, 0): n the unit intensity-gradient normal at p, s = n . (q - e) in pixels;
@@ -22,18 +22,33 @@
 // where testing every window position against every output costs kSpan + 4 times more.
 #extension GL_GOOGLE_include_directive : require
 #include "edge_layout.h"
+#include "sobel.glsl"
 
 layout(constant_id = 1) const int kSpan = 1;
 // Rows per invocation: specialization constant 2 (1 on GPUs; 16 on CPU drivers, where every 8
 // invocations run as one coroutine whose set-up costs about as much as a light kernel's work).
 layout(constant_id = 2) const int kRows = 1;
+// CPU drivers: GRAD is not written (edge_sobel.comp); the normal is recomputed from GRAY.
+layout(constant_id = 3) const int kFusedSobel = 0;
 const int kR = 2;  // ceil(EDGE_LINE_RADIUS_PX)
 const int kCols = kSpan + 2 * kR;
 const float kFar = 1.0e4;  // point of a window position that is no edge: never within the radius
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(push_constant) uniform Push { EdgePush pc; };
 layout(set = 0, binding = EDGE_BINDING_STATE, r32ui) readonly uniform uimage2D state;
-layout(set = 0, binding = EDGE_BINDING_EPOINTS, rgba32f) readonly uniform image2D epoints;
+layout(set = 0, binding = EDGE_BINDING_EPOINTS, rg32f) readonly uniform image2D epoints;
+layout(set = 0, binding = EDGE_BINDING_GRAD, rg32f) readonly uniform image2D grad;
+layout(set = 0, binding = EDGE_BINDING_GRAY, r32f) readonly uniform image2D gray;
+
+// Sobel / 8 at interior pixel p: from GRAD, or with kFusedSobel from GRAY.
+vec2 gradientAt(ivec2 p) {
+  if (kFusedSobel == 0) return imageLoad(grad, p).xy;
+  float a = imageLoad(gray, p + ivec2(-1, -1)).x, b = imageLoad(gray, p + ivec2(0, -1)).x;
+  float c = imageLoad(gray, p + ivec2(1, -1)).x, d = imageLoad(gray, p + ivec2(-1, 0)).x;
+  float f = imageLoad(gray, p + ivec2(1, 0)).x, h = imageLoad(gray, p + ivec2(-1, 1)).x;
+  float i = imageLoad(gray, p + ivec2(0, 1)).x, k = imageLoad(gray, p + ivec2(1, 1)).x;
+  return sobel8(a, b, c, d, f, h, i, k);
+}
 layout(set = 0, binding = EDGE_BINDING_LINES, rgba32f) writeonly uniform image2D lines;
 layout(set = 0, binding = EDGE_BINDING_DISTANCE, r32f) readonly uniform image2D distance_px;
 
@@ -68,11 +83,12 @@ void pixelRow(int x0, int qy, bool listed) {
       for (int c = 0; c < kCols; ++c) {
         int x = x0 - kR + c;
         ivec2 p = ivec2(clamp(x, 0, pc.width - 1), yc);
-        vec4 point = imageLoad(epoints, p);  // only meaningful at an edge pixel
+        vec2 point = imageLoad(epoints, p).xy;  // only meaningful at an edge pixel
         uint pixel_state = imageLoad(state, p).x;
-        bool edge = row_inside && x >= 1 && x <= pc.width - 2 && pixel_state == 2u &&
-                    (point.z != 0.0 || point.w != 0.0);  // zero gradient: no normal
-        e[c] = edge ? point.xy : vec2(kFar);
+        // An edge pixel's magnitude is > 0 (edge_nms.comp keeps no other), so it has a normal
+        // (the CPU skips pixels without one).
+        bool edge = row_inside && x >= 1 && x <= pc.width - 2 && pixel_state == 2u;
+        e[c] = edge ? point : vec2(kFar);
       }
       for (int j = 0; j < kSpan; ++j) {
         for (int k = 0; k <= 2 * kR; ++k) {
@@ -90,9 +106,13 @@ void pixelRow(int x0, int qy, bool listed) {
     if (x0 + j >= pc.width) break;
     vec4 line = vec4(0.0);
     if (best_x[j] >= 0) {
-      vec4 point = imageLoad(epoints, ivec2(best_x[j], best_y[j]));
-      precise vec2 o = vec2(x0 + j, qy) - point.xy;
-      line = vec4(point.z * o.x + point.w * o.y, point.z, point.w, 0.0);
+      ivec2 p = ivec2(best_x[j], best_y[j]);
+      vec2 point = imageLoad(epoints, p).xy;
+      vec2 g = gradientAt(p);
+      precise float len = sqrt(g.x * g.x + g.y * g.y);
+      precise vec2 n = len > 0.0 ? g / len : vec2(0.0);
+      precise vec2 o = vec2(x0 + j, qy) - point;
+      line = vec4(n.x * o.x + n.y * o.y, n, 0.0);
     }
     imageStore(lines, ivec2(x0 + j, qy), line);
   }

@@ -4,7 +4,10 @@
 // bilinear footprint lies inside the image and none of its four distances is truncated.
 // When the four pixels of the footprint carry one sub-pixel edge line (LINES: normals non-zero at
 // (x0, y0), each within dot > 0.8 of it), r = |bilinear s| and (G_u, G_v) = sign(s) * bilinear n;
-// otherwise r = bilinear distance and (G_u, G_v) = bilinear DGRAD.
+// otherwise r = bilinear distance and (G_u, G_v) = bilinear distance gradient, the gradient at
+// each of the four pixels computed here from DISTANCE as computeDistanceField does (no image of
+// it is built per frame: on lavapipe storing it cost ~10 % of the live frame, while the 12
+// distances a point needs replace the 4 two-channel gradient loads it made).
 // J = [G_u G_v] [fx/z 0 -fx x/z^2; 0 fy/z -fy y/z^2] [I | -hat(p)].
 // kMode 0: writes r per point (-1 when invalid). kMode 1: accumulates the 29 normal-equation
 // values (edge_tracker.hpp layout) with t-distribution weights w = (nu + 1) / (nu + (r/sigma)^2)
@@ -18,7 +21,6 @@ layout(constant_id = 0) const int kMode = 0;
 layout(local_size_x = 64) in;
 layout(push_constant) uniform Push { EdgePush pc; };
 layout(set = 0, binding = EDGE_BINDING_DISTANCE, r32f) readonly uniform image2D distance_px;
-layout(set = 0, binding = EDGE_BINDING_DGRAD, rg32f) readonly uniform image2D dgrad;
 layout(set = 0, binding = EDGE_BINDING_LINES, rgba32f) readonly uniform image2D lines;
 layout(std430, set = 0, binding = EDGE_BINDING_POINTS) readonly buffer Points { vec4 points[]; };
 layout(std430, set = 0, binding = EDGE_BINDING_RESIDUALS) writeonly buffer Residuals { float residuals[]; };
@@ -26,6 +28,23 @@ layout(std430, set = 0, binding = EDGE_BINDING_PARTIALS) writeonly buffer Partia
 layout(std430, set = 0, binding = EDGE_BINDING_CONTROL) readonly buffer Control { EdgeControl control; };
 
 shared vec4 subgroup_sums[64][EDGE_REDUCE_VEC4S];
+
+float distanceAt(int x, int y) {
+  return imageLoad(distance_px, ivec2(clamp(x, 0, pc.width - 1), clamp(y, 0, pc.height - 1))).x;
+}
+
+// Distance gradient (G_u, G_v) at pixel c (computeDistanceGradient in host/src/edges_cpu.cpp):
+// central differences inside, one-sided on the border, 0 where the centre d or a neighbour used
+// (left, right, up, down: clamped to the image) is truncated.
+vec2 distanceGradient(ivec2 c, float d, float left, float right, float up, float down) {
+  float t = pc.truncation_px;
+  float span = float(int(c.x > 0) + int(c.x < pc.width - 1));  // 0 for a one-column image
+  float gu = span > 0.0 && d < t && left < t && right < t ? (right - left) / span : 0.0;
+  int ylo = max(c.y - 1, 0), yhi = min(c.y + 1, pc.height - 1);
+  float inv_dy = yhi > ylo ? 1.0 / float(yhi - ylo) : 0.0;
+  float gv = d < t && up < t && down < t ? (down - up) * inv_dy : 0.0;
+  return vec2(gu, gv);
+}
 
 void main() {
   uint stride = 64u * pc.group_count;
@@ -50,14 +69,15 @@ void main() {
     ivec2 q = ivec2(0);
     float w00 = 0.0, w10 = 0.0, w01 = 0.0, w11 = 0.0;
     float r_distance = 0.0;
-    float d_max = 0.0;  // largest of the four distances, pixels
+    float d00 = 0.0, d10 = 0.0, d01 = 0.0, d11 = 0.0;  // distances of the footprint, pixels
+    float d_max = 0.0;                                 // the largest of them
     if (valid) {
       q = ivec2(int(u), int(v));
       float a = u - float(q.x), b = v - float(q.y);
-      float d00 = imageLoad(distance_px, q).x;
-      float d10 = imageLoad(distance_px, q + ivec2(1, 0)).x;
-      float d01 = imageLoad(distance_px, q + ivec2(0, 1)).x;
-      float d11 = imageLoad(distance_px, q + ivec2(1, 1)).x;
+      d00 = imageLoad(distance_px, q).x;
+      d10 = imageLoad(distance_px, q + ivec2(1, 0)).x;
+      d01 = imageLoad(distance_px, q + ivec2(0, 1)).x;
+      d11 = imageLoad(distance_px, q + ivec2(1, 1)).x;
       valid = !(d00 >= trunc || d10 >= trunc || d01 >= trunc || d11 >= trunc);
       d_max = max(max(d00, d10), max(d01, d11));
       w00 = (1.0 - a) * (1.0 - b);
@@ -92,8 +112,15 @@ void main() {
     }
     if (!valid) continue;
     if (!on_line) {
-      g = w00 * imageLoad(dgrad, q).xy + w10 * imageLoad(dgrad, q + ivec2(1, 0)).xy +
-          w01 * imageLoad(dgrad, q + ivec2(0, 1)).xy + w11 * imageLoad(dgrad, q + ivec2(1, 1)).xy;
+      // The 4 x 4 block around the footprint less its corners: 8 distances beyond its own 4.
+      float n0 = distanceAt(q.x, q.y - 1), n1 = distanceAt(q.x + 1, q.y - 1);  // above
+      float w0 = distanceAt(q.x - 1, q.y), w1 = distanceAt(q.x - 1, q.y + 1);  // left
+      float e0 = distanceAt(q.x + 2, q.y), e1 = distanceAt(q.x + 2, q.y + 1);  // right
+      float s0 = distanceAt(q.x, q.y + 2), s1 = distanceAt(q.x + 1, q.y + 2);  // below
+      g = w00 * distanceGradient(q, d00, w0, d10, n0, d01) +
+          w10 * distanceGradient(q + ivec2(1, 0), d10, d00, e0, n1, d11) +
+          w01 * distanceGradient(q + ivec2(0, 1), d01, w1, d11, d00, s0) +
+          w11 * distanceGradient(q + ivec2(1, 1), d11, d01, e1, d10, s1);
     }
     float ga = g.x * fx * iz;
     float gb = g.y * fy * iz;

@@ -40,7 +40,11 @@ constexpr uint32_t kGridGroups = 16;  // workgroups of grid-stride dispatches
 // most of a discrete GPU idle (H100: hysteresis 2.6 ms, threshold 0.8 ms per frame); on a CPU
 // driver (lavapipe runs workgroups as coroutines) few large groups stay best.
 constexpr uint32_t kWideGridGroups = 512;
-constexpr int kHysteresisBatch = 6;       // hysteresis passes per submission
+// Hysteresis passes per submission after the first; the first submission of a level records as
+// many passes as the level needed in the last frame (at least kHysteresisFirstMin): a pass
+// after the fixed point returns at once but still costs a dispatch (~50 us on lavapipe).
+constexpr int kHysteresisBatch = 6;
+constexpr int kHysteresisFirstMin = 2;
 constexpr uint32_t kMaxTimestamps = 512;  // per submission
 
 enum Kernel : int {
@@ -56,7 +60,6 @@ enum Kernel : int {
   kDistance,
   kEdtColumns,
   kEdtRows,
-  kDistanceGradient,
   kEdgeLines,
   kResiduals,
   kNormalEquations,
@@ -89,7 +92,6 @@ constexpr KernelSpec kKernels[kKernelCount] = {{"edge_convert.comp", -1, 1, 16},
                                                {"edge_distance.comp", -1},
                                                {"edt_columns.comp", -1},
                                                {"edt_rows.comp", kModeEdtRadius, 1, 16},
-                                               {"edge_dgrad.comp", -1, 1, 16},
                                                {"edge_lines.comp", -1, 1, 16},
                                                {"reduce_edges.comp", 0},
                                                {"reduce_edges.comp", 1},
@@ -147,11 +149,13 @@ struct GpuEdgeStages::Impl {
 
   struct Level {
     PinholeCamera camera;
-    engine::Image gray, mag, grad, state, seed_a, seed_b, distance, dgrad, lines, epoints;
+    engine::Image gray, mag, grad, state, seed_a, seed_b, distance, lines, epoints;
     Buffer hist, control, candidates;
     VkDescriptorSet set = VK_NULL_HANDLE;
     bool seeds_in_b = false;  // where the final jump-flooding seeds are
     int hysteresis_passes = 0;
+    int hysteresis_first = kHysteresisBatch;  // passes of the first submission (last frame's need)
+    int hysteresis_recorded = 0;              // passes of the last submission
   };
   std::vector<Level> levels;
   Buffer input8;
@@ -278,9 +282,8 @@ Status GpuEdgeStages::Impl::init() {
                                  {&level.seed_a, VK_FORMAT_R32_UINT},
                                  {&level.seed_b, VK_FORMAT_R32_UINT},
                                  {&level.distance, VK_FORMAT_R32_SFLOAT},
-                                 {&level.dgrad, VK_FORMAT_R32G32_SFLOAT},
                                  {&level.lines, VK_FORMAT_R32G32B32A32_SFLOAT},
-                                 {&level.epoints, VK_FORMAT_R32G32B32A32_SFLOAT}}) {
+                                 {&level.epoints, VK_FORMAT_R32G32_SFLOAT}}) {
       auto img = storageImage(w, h, format);
       if (!img.ok()) return img.error();
       *image = std::move(*img);
@@ -312,7 +315,7 @@ Status GpuEdgeStages::Impl::init() {
   std::vector<VkDescriptorSetLayoutBinding> bindings(EDGE_BINDING_COUNT);
   for (uint32_t b = 0; b < EDGE_BINDING_COUNT; ++b) {
     bindings[b].binding = b;
-    const bool image = (b >= EDGE_BINDING_GRAY_PREV && b <= EDGE_BINDING_DGRAD) || b == EDGE_BINDING_LINES ||
+    const bool image = (b >= EDGE_BINDING_GRAY_PREV && b <= EDGE_BINDING_DISTANCE) || b == EDGE_BINDING_LINES ||
                        b == EDGE_BINDING_EPOINTS;
     bindings[b].descriptorType = image ? VK_DESCRIPTOR_TYPE_STORAGE_IMAGE : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     bindings[b].descriptorCount = 1;
@@ -325,7 +328,7 @@ Status GpuEdgeStages::Impl::init() {
   VKLOC_VK(vkCreateDescriptorSetLayout(device, &lci, nullptr, &layout));
   set_layout = DeviceHandle<VkDescriptorSetLayout>(device, layout, vkDestroyDescriptorSetLayout);
   const uint32_t n_sets = static_cast<uint32_t>(levels.size());
-  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 11 * n_sets},
+  VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 10 * n_sets},
                                    {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7 * n_sets}};
   VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   dpci.maxSets = n_sets;
@@ -341,7 +344,7 @@ Status GpuEdgeStages::Impl::init() {
     ai.descriptorSetCount = 1;
     ai.pSetLayouts = &layout;
     VKLOC_VK(vkAllocateDescriptorSets(device, &ai, &L.set));
-    const engine::Image* images[11] = {k > 0 ? &levels[k - 1].gray : &L.gray,
+    const engine::Image* images[10] = {k > 0 ? &levels[k - 1].gray : &L.gray,
                                        &L.gray,
                                        &L.mag,
                                        &L.grad,
@@ -349,16 +352,15 @@ Status GpuEdgeStages::Impl::init() {
                                        &L.seed_a,
                                        &L.seed_b,
                                        &L.distance,
-                                       &L.dgrad,
                                        &L.lines,
                                        &L.epoints};
-    VkDescriptorImageInfo image_infos[11];
-    VkWriteDescriptorSet writes[15];
-    for (int i = 0; i < 11; ++i) {
+    VkDescriptorImageInfo image_infos[10];
+    VkWriteDescriptorSet writes[14];
+    for (int i = 0; i < 10; ++i) {
       image_infos[i] = {VK_NULL_HANDLE, images[i]->view.get(), VK_IMAGE_LAYOUT_GENERAL};
       writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
       writes[i].dstSet = L.set;
-      writes[i].dstBinding = i < 9 ? EDGE_BINDING_GRAY_PREV + i : (i == 9 ? EDGE_BINDING_LINES : EDGE_BINDING_EPOINTS);
+      writes[i].dstBinding = i < 8 ? EDGE_BINDING_GRAY_PREV + i : (i == 8 ? EDGE_BINDING_LINES : EDGE_BINDING_EPOINTS);
       writes[i].descriptorCount = 1;
       writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
       writes[i].pImageInfo = &image_infos[i];
@@ -369,14 +371,14 @@ Status GpuEdgeStages::Impl::init() {
     VkDescriptorBufferInfo buffer_infos[4];
     for (int i = 0; i < 4; ++i) {
       buffer_infos[i] = {buffers[i]->buffer.get(), 0, VK_WHOLE_SIZE};
-      writes[11 + i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-      writes[11 + i].dstSet = L.set;
-      writes[11 + i].dstBinding = buffer_bindings[i];
-      writes[11 + i].descriptorCount = 1;
-      writes[11 + i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-      writes[11 + i].pBufferInfo = &buffer_infos[i];
+      writes[10 + i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+      writes[10 + i].dstSet = L.set;
+      writes[10 + i].dstBinding = buffer_bindings[i];
+      writes[10 + i].descriptorCount = 1;
+      writes[10 + i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      writes[10 + i].pBufferInfo = &buffer_infos[i];
     }
-    vkUpdateDescriptorSets(device, 15, writes, 0, nullptr);
+    vkUpdateDescriptorSets(device, 14, writes, 0, nullptr);
   }
   VKLOC_TRY_STATUS(updatePointBindings());
 
@@ -404,12 +406,16 @@ Status GpuEdgeStages::Impl::init() {
     const int32_t edt_radius =
         std::clamp(static_cast<int32_t>(std::ceil(options.truncation_px)) - 1, 0, int32_t{EDGE_EDT_MAX_RADIUS});
     // Constant 0: the kernel's mode; 1: pixels per invocation of the row-span kernels; 2: their
-    // rows per invocation (constants a shader does not declare are ignored).
-    const int32_t constants[3] = {kKernels[k].mode == kModeEdtRadius ? edt_radius : std::max(kKernels[k].mode, 0), span,
-                                  rowsPerInvocation(static_cast<Kernel>(k))};
-    const VkSpecializationMapEntry entries[3] = {
-        {0, 0, sizeof(int32_t)}, {1, sizeof(int32_t), sizeof(int32_t)}, {2, 2 * sizeof(int32_t), sizeof(int32_t)}};
-    VkSpecializationInfo spec{3, entries, sizeof(constants), constants};
+    // rows per invocation; 3: kFusedSobel, 1 on CPU drivers (edge_sobel.comp writes only the
+    // quantile's samples, NMS and edge lines recompute the gradient from the gray image).
+    // Constants a shader does not declare are ignored.
+    const int32_t constants[4] = {kKernels[k].mode == kModeEdtRadius ? edt_radius : std::max(kKernels[k].mode, 0), span,
+                                  rowsPerInvocation(static_cast<Kernel>(k)), cpu_driver ? 1 : 0};
+    const VkSpecializationMapEntry entries[4] = {{0, 0, sizeof(int32_t)},
+                                                 {1, sizeof(int32_t), sizeof(int32_t)},
+                                                 {2, 2 * sizeof(int32_t), sizeof(int32_t)},
+                                                 {3, 3 * sizeof(int32_t), sizeof(int32_t)}};
+    VkSpecializationInfo spec{4, entries, sizeof(constants), constants};
     VkComputePipelineCreateInfo cpci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
     cpci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
     cpci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
@@ -452,7 +458,7 @@ Status GpuEdgeStages::Impl::init() {
     std::vector<VkImageMemoryBarrier> barriers;
     for (Level& L : levels) {
       for (engine::Image* image :
-           {&L.gray, &L.mag, &L.grad, &L.state, &L.seed_a, &L.seed_b, &L.distance, &L.dgrad, &L.lines, &L.epoints}) {
+           {&L.gray, &L.mag, &L.grad, &L.state, &L.seed_a, &L.seed_b, &L.distance, &L.lines, &L.epoints}) {
         VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
         b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
         b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
@@ -591,7 +597,9 @@ void GpuEdgeStages::Impl::recordFront(int level) {
   Level& L = levels[level];
   EdgePush push = levelPush(level);
   if (level == 0) {
-    dispatch(kConvert, level, push, groups(push.width, 16), groups(push.height, 16 * rowsPerInvocation(kConvert)));
+    // 4 pixels (one uint of the input) per invocation.
+    dispatch(kConvert, level, push, groups(static_cast<int>(groups(push.width, 4)), 16),
+             groups(push.height, 16 * rowsPerInvocation(kConvert)));
     mark("upload");
   } else {
     dispatchSpans(kPyramid, level, push);
@@ -620,11 +628,12 @@ void GpuEdgeStages::Impl::recordFront(int level) {
   dispatchSpans(kNms, level, push);
   mark("nms");
   L.hysteresis_passes = 0;
-  recordHysteresis(level, kHysteresisBatch);
+  recordHysteresis(level, L.hysteresis_first);
 }
 
 void GpuEdgeStages::Impl::recordHysteresis(int level, int passes) {
   Level& L = levels[level];
+  L.hysteresis_recorded = passes;
   EdgePush push = levelPush(level);
   vkCmdFillBuffer(cmd, L.control.buffer.get(), offsetof(EdgeControl, changes), 4 * EDGE_MAX_HYSTERESIS_PASSES, 0);
   computeBarrier(cmd);
@@ -651,8 +660,6 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
     const uint32_t row_gx = std::min<uint32_t>(row_groups, 65535);
     dispatch(kEdtRows, level, push, row_gx, (row_groups + row_gx - 1) / row_gx);
     mark("distance transform");
-    dispatchSpans(kDistanceGradient, level, push);
-    mark("distance gradient");
     recordEdgeLines(level, push, true);
     mark("edge lines");
     return;
@@ -677,8 +684,7 @@ void GpuEdgeStages::Impl::recordDistance(int level) {
   mark("jfa");
   push.flags = in_b ? 1u : 0u;
   dispatch(kDistance, level, push, gx, gy);
-  dispatchSpans(kDistanceGradient, level, push);
-  mark("distance+gradient");
+  mark("distance");
   recordEdgeLines(level, push, false);
   mark("edge lines");
 }
@@ -803,10 +809,11 @@ Status GpuEdgeStages::processLiveImage(const ImageU8& gray) {
       // Passes that ran: up to and including the first that promoted nothing.
       const auto* control = static_cast<const EdgeControl*>(m.levels[k].control.mapped);
       int ran = 0;
-      while (ran < kHysteresisBatch && control->changes[ran] != 0) ++ran;
-      const bool changed = ran == kHysteresisBatch;
-      m.levels[k].hysteresis_passes += changed ? ran : ran + 1;
-      if (changed && m.levels[k].hysteresis_passes + kHysteresisBatch <= EDGE_MAX_HYSTERESIS_PASSES) {
+      Impl::Level& L = m.levels[k];
+      while (ran < L.hysteresis_recorded && control->changes[ran] != 0) ++ran;
+      const bool changed = ran == L.hysteresis_recorded;
+      L.hysteresis_passes += changed ? ran : ran + 1;
+      if (changed && L.hysteresis_passes + kHysteresisBatch <= EDGE_MAX_HYSTERESIS_PASSES) {
         pending.push_back(k);
       }
     }
@@ -815,6 +822,8 @@ Status GpuEdgeStages::processLiveImage(const ImageU8& gray) {
     for (int k : pending) m.recordHysteresis(k, kHysteresisBatch);
     VKLOC_TRY_STATUS(m.submit());
   }
+  for (Impl::Level& L : m.levels)
+    L.hysteresis_first = std::clamp(L.hysteresis_passes, kHysteresisFirstMin, kHysteresisBatch);
   VKLOC_TRY_STATUS(m.begin());
   for (int k = 0; k < static_cast<int>(m.levels.size()); ++k) m.recordDistance(k);
   VKLOC_TRY_STATUS(m.submit());
@@ -825,21 +834,22 @@ Status GpuEdgeStages::processLiveImage(const ImageU8& gray) {
 Result<LiveFrame> GpuEdgeStages::readLiveFrame() {
   Impl& m = *impl_;
   if (!m.have_frame) return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages::readLiveFrame: no live image yet");
-  // Gray, state, distance (4 bytes per pixel), gradient (8) and edge lines (16) of every level,
-  // packed.
+  // Gray, state, distance (4 bytes per pixel) and edge lines (16) of every level, packed. The
+  // distance gradient is not kept on the device (reduce_edges.comp computes it where a point
+  // needs it): it is computed here from the distance, as computeDistanceField does.
   VkDeviceSize total = 0;
-  for (const auto& L : m.levels) total += static_cast<VkDeviceSize>(L.camera.width) * L.camera.height * 36 + 80;
+  for (const auto& L : m.levels) total += static_cast<VkDeviceSize>(L.camera.width) * L.camera.height * 28 + 64;
   auto staging = m.ctx->createBuffer(total, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true);
   if (!staging.ok()) return staging.error();
-  std::vector<std::array<VkDeviceSize, 5>> offsets;
+  std::vector<std::array<VkDeviceSize, 4>> offsets;
   VKLOC_TRY_STATUS(m.ctx->runOnce([&](VkCommandBuffer c) {
     transferReadBarrier(c);
     VkDeviceSize offset = 0;
     for (auto& L : m.levels) {
-      std::array<VkDeviceSize, 5> o{};
-      const engine::Image* images[5] = {&L.gray, &L.state, &L.distance, &L.dgrad, &L.lines};
-      constexpr VkDeviceSize kPixelBytes[5] = {4, 4, 4, 8, 16};
-      for (int i = 0; i < 5; ++i) {
+      std::array<VkDeviceSize, 4> o{};
+      const engine::Image* images[4] = {&L.gray, &L.state, &L.distance, &L.lines};
+      constexpr VkDeviceSize kPixelBytes[4] = {4, 4, 4, 16};
+      for (int i = 0; i < 4; ++i) {
         o[i] = offset;
         VkBufferImageCopy region{};
         region.bufferOffset = offset;
@@ -862,12 +872,11 @@ Result<LiveFrame> GpuEdgeStages::readLiveFrame() {
     out.camera = L.camera;
     out.field.truncation_px = m.options.truncation_px;
     out.field.distance = ImageF32(w, h, 1);
-    out.field.gradient = ImageF32(w, h, 2);
     std::memcpy(out.field.distance.data.data(), base + offsets[k][2], n * 4);
-    std::memcpy(out.field.gradient.data.data(), base + offsets[k][3], n * 8);
+    computeDistanceGradient(out.field);
     if (m.options.subpixel_edges) {
       out.edge_lines = ImageF32(w, h, 3);
-      const auto* lines = reinterpret_cast<const float*>(base + offsets[k][4]);
+      const auto* lines = reinterpret_cast<const float*>(base + offsets[k][3]);
       const float* distance = out.field.distance.data.data();
       for (size_t i = 0; i < n; ++i) {
         // Stale beyond EDGE_LINE_NEAR_PX on the listed path (edge_lines.comp): zero there.

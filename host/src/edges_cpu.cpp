@@ -287,14 +287,12 @@ ImageF32 downsampleHalf(const ImageF32& image) {
   return out;
 }
 
-namespace {
-
-/// Gradient (G_u, G_v) of field.distance into field.gradient (sized by
-/// computeDistanceFieldInto; every value written): central differences inside, one-sided on the
-/// border; zero where a value used is truncated.
 void computeDistanceGradient(DistanceField& field) {
   const int w = field.distance.width;
   const int h = field.distance.height;
+  if (field.gradient.width != w || field.gradient.height != h || field.gradient.channels != 2) {
+    field.gradient = ImageF32(w, h, 2);
+  }
   const float t = field.truncation_px;
   const float* D = field.distance.data.data();
   float* G = field.gradient.data.data();
@@ -328,6 +326,8 @@ void computeDistanceGradient(DistanceField& field) {
     }
   }
 }
+
+namespace {
 
 /// Largest truncation (pixels) the separable transform below handles: squared distances up to
 /// R^2 + (R + 1)^2 with R = ceil(truncation) - 1 must fit int16. Larger truncations use OpenCV's

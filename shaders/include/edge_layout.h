@@ -27,18 +27,17 @@ namespace vkloc::engine {
 #define EDGE_BINDING_SEED_A 6     // r32ui: JFA seeds x | y << 16 (~0u none), or edt_columns' g^2
 #define EDGE_BINDING_SEED_B 7     // r32ui: ping-pong partner of SEED_A
 #define EDGE_BINDING_DISTANCE 8   // r32f: truncated distance to the nearest edge, pixels
-#define EDGE_BINDING_DGRAD 9      // rg32f: distance gradient (G_u, G_v)
-#define EDGE_BINDING_HIST 10      // SSBO: uint[EDGE_HIST_BINS] radix-select histogram
-#define EDGE_BINDING_CONTROL 11   // SSBO: EdgeControl
+#define EDGE_BINDING_HIST 9       // SSBO: uint[EDGE_HIST_BINS] radix-select histogram
+#define EDGE_BINDING_CONTROL 10   // SSBO: EdgeControl
 // CANDIDATES holds the weak candidates (NMS -> hysteresis), then the near-edge row spans
 // (edt_rows -> edge_lines).
-#define EDGE_BINDING_CANDIDATES 12  // SSBO: uint[] pixels or spans, x | y << 16
-#define EDGE_BINDING_POINTS 13      // SSBO: EdgePoint[] (vec4: x, y, z metres, kind bits)
-#define EDGE_BINDING_RESIDUALS 14   // SSBO: float[] residual per point (pixels), -1 = invalid
-#define EDGE_BINDING_PARTIALS 15    // SSBO: vec4[group * 8 + k] per-workgroup normal equations
-#define EDGE_BINDING_LINES 16       // rgba32f: sub-pixel edge line (s, n_u, n_v, 0), LiveLevel::edge_lines
-#define EDGE_BINDING_EPOINTS 17     // rgba32f: sub-pixel edge point (e_u, e_v, n_u, n_v) of an NMS-kept pixel
-#define EDGE_BINDING_COUNT 18
+#define EDGE_BINDING_CANDIDATES 11  // SSBO: uint[] pixels or spans, x | y << 16
+#define EDGE_BINDING_POINTS 12      // SSBO: EdgePoint[] (vec4: x, y, z metres, kind bits)
+#define EDGE_BINDING_RESIDUALS 13   // SSBO: float[] residual per point (pixels), -1 = invalid
+#define EDGE_BINDING_PARTIALS 14    // SSBO: vec4[group * 8 + k] per-workgroup normal equations
+#define EDGE_BINDING_LINES 15       // rgba32f: sub-pixel edge line (s, n_u, n_v, 0), LiveLevel::edge_lines
+#define EDGE_BINDING_EPOINTS 16     // rg32f: sub-pixel edge point (e_u, e_v) of an NMS-kept pixel
+#define EDGE_BINDING_COUNT 17
 
 #define EDGE_HIST_BINS 2048u
 #define EDGE_MAX_HYSTERESIS_PASSES 64

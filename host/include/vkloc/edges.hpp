@@ -73,6 +73,10 @@ struct DistanceField {
   float truncation_px = 0;  ///< Distances >= this are "far from any edge" (outliers).
 };
 
+/// The gradient of a distance field from its distances: field.gradient (resized when needed)
+/// from field.distance and field.truncation_px, by the rule of DistanceField::gradient.
+void computeDistanceGradient(DistanceField& field);
+
 /// Distance field of an edge map (non-zero = edge). With no edge at all every distance is
 /// truncation_px. kInvalidArgument for an empty or multi-channel map or truncation_px <= 0.
 Result<DistanceField> computeDistanceField(const ImageU8& edges, float truncation_px);

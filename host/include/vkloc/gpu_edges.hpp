@@ -7,9 +7,14 @@
 //   magnitude's float bits, three histogram passes on the GPU, nothing read back) -> thresholds
 //   -> non-maximum suppression -> hysteresis (passes over the weak candidates until one changes
 //   nothing; the only host round trip) -> truncated distance (GpuDistanceMethod: jump flooding
-//   JFA+2 from step 2^ceil(log2(truncation)), or the exact separable transform) -> gradient
-//   (G_u, G_v) -> sub-pixel edge lines (LiveLevel::edge_lines,
-//   when LiveFrameOptions::subpixel_edges), which residuals/accumulate use as the CPU does.
+//   JFA+2 from step 2^ceil(log2(truncation)), or the exact separable transform) -> sub-pixel
+//   edge lines (LiveLevel::edge_lines, when LiveFrameOptions::subpixel_edges), which
+//   residuals/accumulate use as the CPU does. The distance gradient (G_u, G_v) is not stored:
+//   residuals/accumulate compute it from the distances around each point, and readLiveFrame
+//   from the read-back distance (computeDistanceGradient).
+// On CPU drivers (lavapipe) the Sobel pass stores only the quantile's samples (NMS and edge
+// lines recompute the gradient from the gray image) and the edge lines visit only the row spans
+// near an edge, which the separable transform lists.
 // Tracking (residuals, accumulate): per reference point the residual and the 29 values of the
 // normal equations (EdgeNormalEquations), reduced on the GPU into per-workgroup partials that
 // the host sums in double.
