@@ -44,6 +44,12 @@ if(NOT out MATCHES "\ncpu +[0-9.]+ +[0-9.]+" OR NOT out MATCHES "\nvulkan +[0-9.
   message(FATAL_ERROR "bench track output lacks a row per backend:\n${out}")
 endif()
 run_fails("bench track, missing sequence" "not found" bench track --sequence ${WORK}/nope)
+# The live-stage benchmark: GPU stages, GPU vs CPU; a frame index past the end is an error.
+run_ok("bench live" bench live --sequence ${seq} --runs 2)
+if(NOT out MATCHES "edge lines +[0-9.]+" OR NOT out MATCHES "GPU / CPU \\(medians\\): [0-9.]+")
+  message(FATAL_ERROR "bench live output lacks the stages or the ratio:\n${out}")
+endif()
+run_fails("bench live, bad frame" "--frame 99" bench live --sequence ${seq} --frame 99)
 
 # Errors: missing sequence, bad option values, bad --init-offset.
 run_fails("missing sequence" "not|No such" track --sequence ${WORK}/nope --out ${WORK}/x.txt)

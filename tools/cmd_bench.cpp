@@ -1,5 +1,7 @@
 // vkloc bench render: timing of model renders at 640x480 for ~10k, 100k and 1M triangles.
 // vkloc bench track: per-frame localization time per stage and backend on one sequence.
+// vkloc bench live: the live-image stages (pyramid, edges, distance fields) on one frame, per
+// GPU stage and against the CPU backend in the same run.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -10,7 +12,9 @@
 
 #include "common.hpp"
 #include "vkloc/demo.hpp"
+#include "vkloc/edges.hpp"
 #include "vkloc/eval.hpp"
+#include "vkloc/gpu_edges.hpp"
 #include "vkloc/localizer.hpp"
 #include "vkloc/se3.hpp"
 #include "vkloc/sequence.hpp"
@@ -235,6 +239,76 @@ void runTrackBench(const TrackBenchArgs& a) {
   for (const auto& [backend, summary] : summaries) std::printf("%s: %s\n", backend.c_str(), summary.c_str());
 }
 
+struct LiveBenchArgs {
+  std::string sequence;
+  int frame = -1;  // -1: the middle frame
+  int levels = 2;
+  int runs = 60;
+  std::string distance = "auto";
+  DeviceArgs device;
+};
+
+void runLiveBench(const LiveBenchArgs& a) {
+  const Sequence seq = take(loadSequence(a.sequence));
+  if (seq.images.empty()) throw Failure{fmt::format("{}: images.txt lists no image", a.sequence)};
+  const size_t index = a.frame < 0 ? seq.images.size() / 2 : static_cast<size_t>(a.frame);
+  if (index >= seq.images.size()) {
+    throw Failure{fmt::format("--frame {}: the sequence has {} images", a.frame, seq.images.size())};
+  }
+  const PinholeCamera camera = sequenceCamera(seq);
+  const ImageU8 gray = take(readImageU8(seq.imagePath(index), 1));
+  LiveFrameOptions options;
+  options.levels = a.levels;
+  options.keep_intermediate = false;
+  const GpuDistanceMethod method = a.distance == "separable" ? GpuDistanceMethod::kSeparable
+                                   : a.distance == "jfa"     ? GpuDistanceMethod::kJumpFlooding
+                                                             : GpuDistanceMethod::kAuto;
+  auto context = a.device.create();
+  auto stages = take(GpuEdgeStages::create(context, camera, options, method));
+  std::printf("%s frame %zu (%dx%d), %d levels; device %s (%s), distance %s, validation %s; medians of %d runs\n",
+              seq.name.c_str(), index, camera.width, camera.height, stages->levelCount(),
+              context->device().name.c_str(), context->device().type.c_str(),
+              gpuDistanceMethodName(stages->distanceMethod()), context->validationEnabled() ? "ON (slower)" : "off",
+              a.runs);
+  const int warmup = 5;  // shader JIT on lavapipe, caches
+  std::vector<double> untimed;
+  for (int i = -warmup; i < a.runs; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    check(stages->processLiveImage(gray));
+    if (i >= 0) untimed.push_back(msSince(t0));
+  }
+  // Per-stage device times: timestamps between stages (each drains lavapipe's queue, so their
+  // sum exceeds the untimed frame there).
+  stages->setStageTimings(true);
+  std::vector<std::pair<std::string, std::vector<double>>> per_stage;
+  for (int i = 0; i < a.runs; ++i) {
+    check(stages->processLiveImage(gray));
+    for (const GpuStageTiming& t : stages->lastTimings()) {
+      auto it = std::find_if(per_stage.begin(), per_stage.end(), [&](const auto& s) { return s.first == t.stage; });
+      if (it == per_stage.end()) it = per_stage.insert(per_stage.end(), {t.stage, {}});
+      it->second.push_back(t.ms);
+    }
+  }
+  LiveFrame cpu_frame;
+  std::vector<double> cpu;
+  for (int i = -warmup; i < a.runs; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    check(buildLiveFrame(gray, camera, options, cpu_frame));
+    if (i >= 0) cpu.push_back(msSince(t0));
+  }
+  double stage_sum = 0;
+  std::printf("GPU stages (device time, ms):\n");
+  for (const auto& [stage, ms] : per_stage) {
+    stage_sum += median(ms);
+    std::printf("  %-20s %8.3f\n", stage.c_str(), median(ms));
+  }
+  std::printf("  %-20s %8.3f (with a timestamp after every stage)\n", "sum", stage_sum);
+  const Stats g = stats(untimed), c = stats(cpu);
+  std::printf("GPU frame, host wall (no timestamps): median %.3f ms (p10 %.3f, p90 %.3f)\n", g.median, g.p10, g.p90);
+  std::printf("CPU frame (buildLiveFrame):           median %.3f ms (p10 %.3f, p90 %.3f)\n", c.median, c.p10, c.p90);
+  std::printf("GPU / CPU (medians): %.2f\n", g.median / c.median);
+}
+
 }  // namespace
 
 static void addBenchVerb(CLI::App& app) {
@@ -280,6 +354,21 @@ static void addBenchVerb(CLI::App& app) {
       ->capture_default_str();
   track->add_option("--frames", targs->max_frames, "Use only the first N frames (0 = all)")->capture_default_str();
   track->callback([targs] { runTrackBench(*targs); });
+
+  auto largs = std::make_shared<LiveBenchArgs>();
+  CLI::App* live = bench->add_subcommand(
+      "live", "Live-image stages (pyramid, edges, distance fields) on one frame: per GPU stage, and GPU vs CPU");
+  largs->device.add(*live);
+  live->add_option("--sequence", largs->sequence, "Sequence folder (its camera and one of its images)")->required();
+  live->add_option("--frame", largs->frame, "Image index (default: the middle one)");
+  live->add_option("--levels", largs->levels, "Pyramid levels (the tracker's default options build 2)")
+      ->check(CLI::Range(1, 8))
+      ->capture_default_str();
+  live->add_option("--distance", largs->distance, "GPU distance transform: auto | separable | jfa")
+      ->check(CLI::IsMember({"auto", "separable", "jfa"}))
+      ->capture_default_str();
+  live->add_option("--runs", largs->runs, "Timed runs")->check(CLI::Range(1, 100000))->capture_default_str();
+  live->callback([largs] { runLiveBench(*largs); });
 }
 
 VKLOC_REGISTER_VERB(90, addBenchVerb);
