@@ -10,7 +10,9 @@
 #include <cstdlib>
 #include <ctime>
 #include <map>
+#include <optional>
 #include <random>
+#include <string>
 
 #include "analytic_scenes.hpp"
 #include "gpu_test_support.hpp"
@@ -159,6 +161,47 @@ TEST_F(GpuEdges, LiveFrameMatchesCpuOnSeededImages) {
   }
 }
 
+/// Sets VKLOC_KERNEL_SHAPES for its lifetime (GpuEdgeStages::create reads it).
+class KernelShapes {
+ public:
+  explicit KernelShapes(const char* shapes) {
+    if (const char* v = std::getenv("VKLOC_KERNEL_SHAPES")) saved_ = v;
+    setenv("VKLOC_KERNEL_SHAPES", shapes, 1);
+  }
+  ~KernelShapes() {
+    if (saved_) {
+      setenv("VKLOC_KERNEL_SHAPES", saved_->c_str(), 1);
+    } else {
+      unsetenv("VKLOC_KERNEL_SHAPES");
+    }
+  }
+  KernelShapes(const KernelShapes&) = delete;
+  KernelShapes& operator=(const KernelShapes&) = delete;
+
+ private:
+  std::optional<std::string> saved_;
+};
+
+// The other device type's kernel shapes on this device (on lavapipe: the GPU variants, one
+// pixel and row per invocation, Sobel stored for NMS, dense edge lines with jump flooding),
+// against the CPU as above; an odd size for the borders.
+TEST_F(GpuEdges, OtherKernelShapesMatchCpuToo) {
+  LiveFrameOptions options;
+  options.levels = 2;
+  for (const char* shapes : {"gpu", "cpu"}) {
+    KernelShapes scoped(shapes);
+    for (GpuDistanceMethod method : kBothMethods) {
+      method_ = method;
+      SCOPED_TRACE(::testing::Message() << shapes << " shapes, " << gpuDistanceMethodName(method));
+      compareLiveFrame(randomImage(321, 239, 4), PinholeCamera{300.0, 300.0, 160.0, 119.0, 321, 239}, options);
+    }
+  }
+  KernelShapes bad("fast");
+  auto stages = GpuEdgeStages::create(context_, qvga(), options);
+  ASSERT_FALSE(stages.ok());
+  EXPECT_NE(stages.error().message.find("VKLOC_KERNEL_SHAPES"), std::string::npos);
+}
+
 TEST_F(GpuEdges, LiveFrameMatchesCpuWithOddSizeAndOtherOptions) {
   // Odd sizes exercise the (w + 1) / 2 pyramid and border replication; a low percentile and a
   // small truncation exercise the radix select and a short jump-flooding schedule.
@@ -255,6 +298,26 @@ std::vector<EdgePoint> pointsNearEdges(const LiveLevel& level, const Pose& T_cam
   return points;
 }
 
+/// GPU residuals vs the CPU's for the same points: same validity, values equal to float
+/// projection accuracy (2e-4 px: (u, v) in float carry ~5e-5 px, times |grad d| <= ~1.5), more
+/// than min_valid of them valid.
+void expectResidualsMatch(const std::vector<float>& gpu, const std::vector<float>& cpu, int min_valid) {
+  ASSERT_EQ(gpu.size(), cpu.size());
+  int valid = 0, mismatched = 0;
+  double worst = 0;
+  for (size_t i = 0; i < cpu.size(); ++i) {
+    const bool a = gpu[i] >= 0, b = cpu[i] >= 0;
+    mismatched += a != b;
+    if (a && b) {
+      ++valid;
+      worst = std::max(worst, std::abs(static_cast<double>(gpu[i]) - cpu[i]));
+    }
+  }
+  EXPECT_GT(valid, min_valid);
+  EXPECT_EQ(mismatched, 0);
+  EXPECT_LE(worst, 2e-4);
+}
+
 TEST_F(GpuEdges, ResidualsAndNormalEquationsMatchCpuOnTheSameField) {
   LiveFrameOptions options;
   options.levels = 2;
@@ -277,25 +340,10 @@ TEST_F(GpuEdges, ResidualsAndNormalEquationsMatchCpuOnTheSameField) {
     const std::vector<EdgePoint> points = pointsNearEdges(L, T_camera_ref, 3000, 11 + level);
     ASSERT_TRUE(stages->setReference(points).ok());
 
-    // Residual pass: same validity, residuals equal to float projection accuracy (2e-4 px:
-    // (u, v) in float carry ~5e-5 px, times |grad d| <= ~1.5).
     auto gpu_r = stages->residuals(T_eval, level);
     ASSERT_TRUE(gpu_r.ok()) << gpu_r.error().message;
     const std::vector<float> cpu_r = evaluateEdgeResiduals(points, T_eval, L);
-    ASSERT_EQ(gpu_r->size(), cpu_r.size());
-    int valid = 0, mismatched = 0;
-    double worst = 0;
-    for (size_t i = 0; i < cpu_r.size(); ++i) {
-      const bool a = (*gpu_r)[i] >= 0, b = cpu_r[i] >= 0;
-      mismatched += a != b;
-      if (a && b) {
-        ++valid;
-        worst = std::max(worst, std::abs(static_cast<double>((*gpu_r)[i]) - cpu_r[i]));
-      }
-    }
-    EXPECT_GT(valid, 2500);
-    EXPECT_EQ(mismatched, 0);
-    EXPECT_LE(worst, 2e-4);
+    expectResidualsMatch(*gpu_r, cpu_r, 2500);
 
     // Normal equations: every value within 1e-4 of the sum of the absolute per-point
     // contributions (the scale float accumulation errors are relative to), count exact.
@@ -378,20 +426,7 @@ TEST_F(GpuEdges, SparseFrameAfterADenseOneSeesNoEarlierEdgeLines) {
       ASSERT_TRUE(stages->setReference(points).ok());
       auto gpu_r = stages->residuals(T_eval, level);
       ASSERT_TRUE(gpu_r.ok()) << gpu_r.error().message;
-      const std::vector<float> cpu_r = evaluateEdgeResiduals(points, T_eval, c);
-      int valid = 0, mismatched = 0;
-      double worst = 0;
-      for (size_t i = 0; i < cpu_r.size(); ++i) {
-        const bool a = (*gpu_r)[i] >= 0, b = cpu_r[i] >= 0;
-        mismatched += a != b;
-        if (a && b) {
-          ++valid;
-          worst = std::max(worst, std::abs(static_cast<double>((*gpu_r)[i]) - cpu_r[i]));
-        }
-      }
-      EXPECT_GT(valid, 1500);
-      EXPECT_EQ(mismatched, 0);
-      EXPECT_LE(worst, 2e-4);
+      expectResidualsMatch(*gpu_r, evaluateEdgeResiduals(points, T_eval, c), 1500);
     }
   }
 }

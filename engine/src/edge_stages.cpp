@@ -239,6 +239,15 @@ Result<engine::Image> GpuEdgeStages::Impl::storageImage(int w, int h, VkFormat f
 Status GpuEdgeStages::Impl::init() {
   device = ctx->device;
   cpu_driver = ctx->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  // VKLOC_KERNEL_SHAPES=gpu|cpu overrides the device type's kernel shapes (so that the GPU
+  // variants are tested on lavapipe too).
+  if (const char* shapes = std::getenv("VKLOC_KERNEL_SHAPES"); shapes && *shapes) {
+    if (std::strcmp(shapes, "gpu") != 0 && std::strcmp(shapes, "cpu") != 0) {
+      return makeError(ErrorCode::kInvalidArgument,
+                       fmt::format("VKLOC_KERNEL_SHAPES is '{}': expected gpu or cpu", shapes));
+    }
+    cpu_driver = std::strcmp(shapes, "cpu") == 0;
+  }
   wide_groups = cpu_driver ? kGridGroups : kWideGridGroups;
   span = cpu_driver ? 8 : 1;
   for (VkFormat f :
@@ -747,6 +756,7 @@ Result<std::unique_ptr<GpuEdgeStages>> GpuEdgeStages::create(std::shared_ptr<Gpu
     // on GPUs.
     const bool cpu_driver = impl->ctx->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
     distance_method = cpu_driver && separable_fits ? GpuDistanceMethod::kSeparable : GpuDistanceMethod::kJumpFlooding;
+    // (Decided by the device, not VKLOC_KERNEL_SHAPES: tests pick the method explicitly.)
   }
   impl->distance_method = distance_method;
   VKLOC_TRY_STATUS(impl->init());

@@ -56,6 +56,10 @@ class GpuEdgeStages {
   /// while the previous one is at least 16x16). kInvalidArgument for a bad camera or options,
   /// kGpuError when the device lacks a needed format (r32f / rg32f / r32ui storage images) or
   /// memory; kInvalidArgument for kSeparable with truncation_px > 65.
+  /// Kernel shapes (pixels and rows per invocation, Sobel recomputed in NMS, grid sizes) follow
+  /// the device type: CPU drivers one way, GPUs another. The environment variable
+  /// VKLOC_KERNEL_SHAPES=gpu|cpu overrides that (for tests: both variants on one device; the
+  /// results are the same).
   static Result<std::unique_ptr<GpuEdgeStages>> create(std::shared_ptr<GpuContext> context, const PinholeCamera& camera,
                                                        const LiveFrameOptions& options = {},
                                                        GpuDistanceMethod distance_method = GpuDistanceMethod::kAuto);
