@@ -61,10 +61,10 @@ void pixelRow(int x0, int y) {
 void main() {
   // Invocations numbered along the spans of a row, then by block of kRows rows; the grid may be
   // 2D when a 1D one would exceed 65535 groups.
-  int spans = (pc.width + kSpan - 1) / kSpan;
+  int row_spans = (pc.width + kSpan - 1) / kSpan;
   int id = int(gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x);
-  int block = id / spans;
-  int x0 = (id - block * spans) * kSpan;
+  int block = id / row_spans;
+  int x0 = (id - block * row_spans) * kSpan;
   for (int r = 0; r < kRows; ++r) {
     int y = block * kRows + r;
     if (y >= pc.height) return;

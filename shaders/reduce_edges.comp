@@ -38,10 +38,13 @@ float distanceAt(int x, int y) {
 // (left, right, up, down: clamped to the image) is truncated.
 vec2 distanceGradient(ivec2 c, float d, float left, float right, float up, float down) {
   float t = pc.truncation_px;
-  float span = float(int(c.x > 0) + int(c.x < pc.width - 1));  // 0 for a one-column image
-  float gu = span > 0.0 && d < t && left < t && right < t ? (right - left) / span : 0.0;
+  // Steps of 2 or 1 pixels: scales 0.5 or 1, multiplied as the CPU does (no division, whose
+  // rounding Vulkan does not pin down).
+  int span = int(c.x > 0) + int(c.x < pc.width - 1);  // 0 for a one-column image
+  float inv_dx = span == 2 ? 0.5 : 1.0;
+  float gu = span > 0 && d < t && left < t && right < t ? (right - left) * inv_dx : 0.0;
   int ylo = max(c.y - 1, 0), yhi = min(c.y + 1, pc.height - 1);
-  float inv_dy = yhi > ylo ? 1.0 / float(yhi - ylo) : 0.0;
+  float inv_dy = yhi - ylo == 2 ? 0.5 : (yhi > ylo ? 1.0 : 0.0);
   float gv = d < t && up < t && down < t ? (down - up) * inv_dy : 0.0;
   return vec2(gu, gv);
 }
