@@ -168,13 +168,13 @@ struct GpuEdgeStages::Impl {
   bool have_frame = false;
   uint32_t wide_groups = kGridGroups;  // workgroups of histogram and hysteresis passes
   GpuDistanceMethod distance_method = GpuDistanceMethod::kJumpFlooding;  // resolved (never kAuto)
-  // Pixels per invocation of the Sobel, distance-gradient and edge-lines kernels: 8 on CPU
+  // Pixels per invocation of the Sobel, NMS and edge-lines kernels: 8 on CPU
   // drivers (one window read serves 8 pixels: lavapipe gathers lane by lane), 1 on GPUs.
   int32_t span = 1;
-  bool cpu_driver = false;
+  bool cpu_shapes = false;  // kernel shapes of CPU drivers (device type or VKLOC_KERNEL_SHAPES)
   /// Rows per invocation of kernel k (KernelSpec::rows_gpu / rows_cpu), >= 1.
   int32_t rowsPerInvocation(Kernel k) const {
-    return std::max(cpu_driver ? kKernels[k].rows_cpu : kKernels[k].rows_gpu, 1);
+    return std::max(cpu_shapes ? kKernels[k].rows_cpu : kKernels[k].rows_gpu, 1);
   }
 
   DeviceHandle<VkDescriptorSetLayout> set_layout;
@@ -238,7 +238,7 @@ Result<engine::Image> GpuEdgeStages::Impl::storageImage(int w, int h, VkFormat f
 
 Status GpuEdgeStages::Impl::init() {
   device = ctx->device;
-  cpu_driver = ctx->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  cpu_shapes = ctx->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
   // VKLOC_KERNEL_SHAPES=gpu|cpu overrides the device type's kernel shapes (so that the GPU
   // variants are tested on lavapipe too).
   if (const char* shapes = std::getenv("VKLOC_KERNEL_SHAPES"); shapes && *shapes) {
@@ -246,10 +246,10 @@ Status GpuEdgeStages::Impl::init() {
       return makeError(ErrorCode::kInvalidArgument,
                        fmt::format("VKLOC_KERNEL_SHAPES is '{}': expected gpu or cpu", shapes));
     }
-    cpu_driver = std::strcmp(shapes, "cpu") == 0;
+    cpu_shapes = std::strcmp(shapes, "cpu") == 0;
   }
-  wide_groups = cpu_driver ? kGridGroups : kWideGridGroups;
-  span = cpu_driver ? 8 : 1;
+  wide_groups = cpu_shapes ? kGridGroups : kWideGridGroups;
+  span = cpu_shapes ? 8 : 1;
   for (VkFormat f :
        {VK_FORMAT_R32_SFLOAT, VK_FORMAT_R32G32_SFLOAT, VK_FORMAT_R32_UINT, VK_FORMAT_R32G32B32A32_SFLOAT}) {
     VkFormatProperties p{};
@@ -419,7 +419,7 @@ Status GpuEdgeStages::Impl::init() {
     // quantile's samples, NMS and edge lines recompute the gradient from the gray image).
     // Constants a shader does not declare are ignored.
     const int32_t constants[4] = {kKernels[k].mode == kModeEdtRadius ? edt_radius : std::max(kKernels[k].mode, 0), span,
-                                  rowsPerInvocation(static_cast<Kernel>(k)), cpu_driver ? 1 : 0};
+                                  rowsPerInvocation(static_cast<Kernel>(k)), cpu_shapes ? 1 : 0};
     const VkSpecializationMapEntry entries[4] = {{0, 0, sizeof(int32_t)},
                                                  {1, sizeof(int32_t), sizeof(int32_t)},
                                                  {2, 2 * sizeof(int32_t), sizeof(int32_t)},
@@ -834,7 +834,7 @@ Status GpuEdgeStages::processLiveImage(const ImageU8& gray) {
   }
   // On a GPU an idle pass costs microseconds and a second submission 0.4-0.6 ms (H100 host):
   // the first submission keeps the full batch there.
-  if (m.cpu_driver) {
+  if (m.cpu_shapes) {
     for (Impl::Level& L : m.levels) {
       L.hysteresis_first = std::clamp(L.hysteresis_passes, kHysteresisFirstMin, kHysteresisBatch);
     }

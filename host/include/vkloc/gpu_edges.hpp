@@ -129,7 +129,8 @@ class GpuEdgeStages {
   /// "submission (host)", the host wall time of its submissions.
   const std::vector<GpuStageTiming>& lastTimings() const;
   /// Timestamps between stages, off by default: on lavapipe each one drains the queue (Castle-simu
-  /// frame keeping its reference: 21.5 ms with them, 17.7 without; alignment 3.8 -> 1.8 ms).
+  /// frame keeping its reference, measured before the live stages were reshaped: 21.5 ms with
+  /// them, 17.7 without; `vkloc bench live` prints both for the live stages).
   void setStageTimings(bool enabled);
 
   struct Impl;
