@@ -1,16 +1,17 @@
-# Compiles GLSL to SPIR-V at build time and embeds the words into a static library.
+# Compiles GLSL to SPIR-V at build time and generates one C++ file embedding the words.
 #
-# vkloc_embed_shaders(<target> <shader files...>) creates <target> with
-#   vkloc_shaders_generated.hpp: `const vkloc::engine::ShaderBlob* findShader(std::string_view)`
-# Each shader is compiled by glslc (or glslangValidator) with dependency tracking, so editing a
-# shader or any file it #includes rebuilds it. Nothing is written into the source tree.
+# vkloc_compile_shaders(<out_var> <shader files...>) sets <out_var> to the generated C++ file,
+# which defines `const vkloc::engine::ShaderBlob* findShader(std::string_view)` (declared in
+# engine/src/shader_registry.hpp); add it to the engine's sources. Each shader is compiled by glslc
+# (or glslangValidator) with dependency tracking, so editing a shader or any file it #includes
+# rebuilds it. Nothing is written into the source tree.
 find_program(VKLOC_GLSLC glslc)
 find_program(VKLOC_GLSLANG glslangValidator)
 if(NOT VKLOC_GLSLC AND NOT VKLOC_GLSLANG)
   message(FATAL_ERROR "No GLSL compiler: install glslc or glslang-tools (scripts/install-deps.sh)")
 endif()
 
-function(vkloc_embed_shaders target)
+function(vkloc_compile_shaders out_var)
   set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/shaders)
   file(MAKE_DIRECTORY ${out_dir})
   set(spv_files)
@@ -51,6 +52,5 @@ function(vkloc_embed_shaders target)
     DEPENDS ${spv_files} ${CMAKE_CURRENT_FUNCTION_LIST_DIR}/EmbedSpirv.cmake
     COMMENT "Embedding SPIR-V"
     VERBATIM)
-  add_library(${target} STATIC ${gen_cpp})
-  target_include_directories(${target} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/engine/src)
+  set(${out_var} ${gen_cpp} PARENT_SCOPE)
 endfunction()

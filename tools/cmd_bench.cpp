@@ -11,13 +11,16 @@
 #include <sstream>
 
 #include "common.hpp"
-#include "vkloc/demo.hpp"
-#include "vkloc/edges.hpp"
-#include "vkloc/eval.hpp"
-#include "vkloc/gpu_edges.hpp"
-#include "vkloc/localizer.hpp"
-#include "vkloc/se3.hpp"
-#include "vkloc/sequence.hpp"
+#include "vkloc/core/se3.hpp"
+#include "vkloc/engine/gpu_accelerator.hpp"
+#include "vkloc/engine/gpu_edges.hpp"
+#include "vkloc/eval/eval.hpp"
+#include "vkloc/io/image_io.hpp"
+#include "vkloc/io/sequence.hpp"
+#include "vkloc/localize/localizer.hpp"
+#include "vkloc/render/cpu_renderer.hpp"
+#include "vkloc/sim/demo_models.hpp"
+#include "vkloc/track/reference_edges.hpp"
 
 namespace vkloc::cli {
 namespace {
@@ -188,7 +191,7 @@ void runTrackBench(const TrackBenchArgs& a) {
     setSequenceInertial(seq, true, options);
     TrackBenchRun run;
     const auto t0 = std::chrono::steady_clock::now();
-    auto localizer = take(Localizer::create(model, camera, options, context));
+    auto localizer = take(Localizer::create(model, camera, options, take(makeGpuAccelerator(context))));
     run.create_ms = msSince(t0);
     run.summary = localizer->backendSummary();
     for (int pass = -1; pass < a.runs; ++pass) {  // pass -1: warm-up (shader JIT, caches).

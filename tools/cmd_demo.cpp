@@ -8,8 +8,8 @@
 #include <filesystem>
 
 #include "common.hpp"
-#include "vkloc/demo.hpp"
-#include "vkloc/simulate.hpp"
+#include "vkloc/sim/demo_models.hpp"
+#include "vkloc/sim/simulate.hpp"
 
 namespace vkloc::cli {
 

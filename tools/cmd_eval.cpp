@@ -2,8 +2,9 @@
 #include <cstdio>
 
 #include "common.hpp"
-#include "vkloc/eval.hpp"
-#include "vkloc/sequence.hpp"
+#include "vkloc/eval/eval.hpp"
+#include "vkloc/eval/report.hpp"
+#include "vkloc/io/sequence.hpp"
 
 namespace vkloc::cli {
 

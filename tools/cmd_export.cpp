@@ -2,7 +2,7 @@
 #include <cstdio>
 
 #include "common.hpp"
-#include "vkloc/model_write.hpp"
+#include "vkloc/model/model_write.hpp"
 
 namespace vkloc::cli {
 

@@ -3,8 +3,9 @@
 #include <optional>
 
 #include "common.hpp"
-#include "vkloc/sequence.hpp"
-#include "vkloc/visp.hpp"
+#include "vkloc/io/import.hpp"
+#include "vkloc/io/sequence.hpp"
+#include "vkloc/model/cao.hpp"
 
 namespace vkloc::cli {
 

@@ -4,7 +4,8 @@
 #include <cstdio>
 
 #include "common.hpp"
-#include "vkloc/demo.hpp"
+#include "vkloc/render/cpu_renderer.hpp"
+#include "vkloc/sim/demo_models.hpp"
 
 namespace vkloc::cli {
 namespace {

@@ -8,8 +8,9 @@
 #include <filesystem>
 
 #include "common.hpp"
-#include "vkloc/demo.hpp"
-#include "vkloc/simulate.hpp"
+#include "vkloc/render/cpu_renderer.hpp"
+#include "vkloc/sim/demo_models.hpp"
+#include "vkloc/sim/simulate.hpp"
 
 namespace vkloc::cli {
 namespace {
@@ -143,9 +144,9 @@ void run(const CLI::App& cmd, const SimulateArgs& a) {
   options.camera = loadCameraArg(a.camera, options.camera);
   applyOverrides(cmd, a, options);
 
-  SceneRendererFactory factory;
+  RendererFactory factory;
   if (a.reference) {
-    factory = referenceRendererFactory();
+    factory = cpuRendererFactory();
     std::printf("renderer: CPU reference\n");
   } else {
     auto context = a.device.create();

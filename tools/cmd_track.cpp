@@ -10,11 +10,15 @@
 #include <memory>
 
 #include "common.hpp"
-#include "vkloc/demo.hpp"
-#include "vkloc/eval.hpp"
-#include "vkloc/localizer.hpp"
-#include "vkloc/se3.hpp"
-#include "vkloc/sequence.hpp"
+#include "vkloc/core/atomic_file.hpp"
+#include "vkloc/core/se3.hpp"
+#include "vkloc/engine/gpu_accelerator.hpp"
+#include "vkloc/eval/eval.hpp"
+#include "vkloc/eval/report.hpp"
+#include "vkloc/io/image_io.hpp"
+#include "vkloc/io/sequence.hpp"
+#include "vkloc/localize/localizer.hpp"
+#include "vkloc/sim/demo_models.hpp"
 
 namespace vkloc::cli {
 namespace {
@@ -25,6 +29,7 @@ struct TrackArgs {
   std::string frames_csv;
   std::string backend = "auto";
   std::string policy = "when-needed";
+  std::string keyframes = "worker";
   std::string motion = "constant-velocity";
   size_t max_frames = 0;
   std::string report_dir;
@@ -34,29 +39,6 @@ struct TrackArgs {
   bool quiet = false;
   DeviceArgs device;
   bool no_vulkan = false;
-};
-
-/// A file written line by line and flushed after each, so that an interrupted run keeps
-/// everything written before.
-class LineWriter {
- public:
-  explicit LineWriter(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "w")) {
-    if (!file_) throw Failure{fmt::format("{}: cannot open for writing", path)};
-  }
-  ~LineWriter() {
-    if (file_) std::fclose(file_);
-  }
-  LineWriter(const LineWriter&) = delete;
-  LineWriter& operator=(const LineWriter&) = delete;
-  void line(const std::string& text) {
-    if (std::fputs(text.c_str(), file_) < 0 || std::fputc('\n', file_) == EOF || std::fflush(file_) != 0) {
-      throw Failure{fmt::format("{}: write failed", path_)};
-    }
-  }
-
- private:
-  std::string path_;
-  std::FILE* file_;
 };
 
 std::string seconds(int64_t t_ns) {
@@ -80,6 +62,7 @@ void run(const TrackArgs& a) {
   LocalizerOptions options;
   options.backend = take(parseLocalizerBackend(a.backend));
   options.policy = take(parseRerenderPolicy(a.policy));
+  options.keyframe_threading = take(parseKeyframeThreading(a.keyframes));
   options.calibrate_backend = a.calibrate;
   if (a.motion == "last-pose") {
     options.motion = MotionModel::kLastPose;
@@ -94,7 +77,9 @@ void run(const TrackArgs& a) {
   const Model model = loadSequenceModel(seq);
   std::shared_ptr<GpuContext> context;
   if (!a.no_vulkan) context = a.device.create();
-  auto localizer = take(Localizer::create(model, camera, options, context));
+  std::shared_ptr<Accelerator> accelerator;
+  if (context) accelerator = take(makeGpuAccelerator(context));
+  auto localizer = take(Localizer::create(model, camera, options, accelerator));
   localizer->reset(T_init);
   const double setup_ms = msSince(t_start);
 
@@ -113,15 +98,17 @@ void run(const TrackArgs& a) {
   const std::string frames_path = a.frames_csv.empty()
                                       ? (out_path.parent_path() / (out_path.stem().string() + "_frames.csv")).string()
                                       : a.frames_csv;
-  LineWriter traj(a.out);
-  LineWriter frames(frames_path);
-  traj.line(
+  // New output goes to "<file>.partial" until the run is complete: a failed run never
+  // truncates the previous trajectory and log, and keeps what it tracked.
+  auto traj = take(PartialFileWriter::open(a.out));
+  auto frames = take(PartialFileWriter::open(frames_path));
+  check(traj->appendLine(
       "# vkloc track: T_world_camera, TUM format: t tx ty tz qx qy qz qw (lost frames are not listed; inertial-only "
-      "ones are)");
-  frames.line(
+      "ones are)"));
+  check(frames->appendLine(
       "t_ns,state,render_ms,reference_ms,live_ms,align_ms,total_ms,inlier_ratio,mean_residual_px,points,iterations,"
-      "rerendered,visible_ratio,spread_ratio,chance_inlier_ratio,scale_px");
-
+      "rerendered,visible_ratio,spread_ratio,chance_inlier_ratio,scale_px,keyframe_id,keyframe_age_frames,"
+      "keyframe_adopted"));
   const bool tty = isatty(fileno(stdout)) != 0 && !a.quiet;
   size_t last_decile = 0;
   std::vector<StampedPose> estimate;
@@ -131,57 +118,67 @@ void run(const TrackArgs& a) {
   long first_tracked = -1;
   double first_frame_ms = 0;
   const auto t_frames = std::chrono::steady_clock::now();
-  for (size_t i = 0; i < total; ++i) {
-    const ImageEntry& entry = seq.images[i];
-    ImageU8 gray = take(readImageU8(seq.imagePath(i), 1));
-    if (use_imu) next_imu = feedSequenceImu(seq, next_imu, entry.t_ns, *localizer);
-    Result<LocalizationResult> r = localizer->localize(entry.t_ns, gray);
-    if (!r.ok()) throw Failure{fmt::format("{}: frame {}: {}", seq.imagePath(i), i, r.error().message)};
-    const LocalizationResult& f = *r;
-    const bool tracking = f.state == TrackingState::kTracking;
-    const bool has_pose = tracking || f.state == TrackingState::kInertial;
-    if (tracking && first_tracked < 0) first_tracked = static_cast<long>(i);
-    lost_after_first += !has_pose && first_tracked >= 0;
-    inertial += f.state == TrackingState::kInertial;
-    rejected += f.visual_rejected;
-    if (has_pose) {
-      traj.line(fmt::format("{} {}", seconds(entry.t_ns), formatPose(f.T_world_camera)));
-      estimate.push_back({entry.t_ns, f.T_world_camera});
-    } else {
-      ++lost;
-    }
-    rerendered += f.reference_rendered;
-    frames.line(
-        fmt::format("{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f}",
-                    entry.t_ns, trackingStateName(f.state), f.render_ms, f.reference_ms, f.live_ms, f.align_ms,
-                    f.total_ms, f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used,
-                    f.quality.iterations, f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio,
-                    f.quality.chance_inlier_ratio, f.quality.scale_px));
-    if (i == 0) {
-      first_frame_ms = f.total_ms;
-    } else {
-      total_ms.push_back(f.total_ms);
-    }
-    if (f.scene_depth_m > 0) depths.push_back(f.scene_depth_m);
-    if (!a.quiet) {
-      const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_frames).count();
-      const double fps = s > 0 ? static_cast<double>(i + 1) / s : 0.0;
-      if (tty) {
-        std::printf("\rframe %zu/%zu  %.1f fps  lost %zu  inertial %zu  re-rendered %zu", i + 1, total, fps, lost,
-                    inertial, rerendered);
-        if (i + 1 == total) std::printf("\n");
-        std::fflush(stdout);
+  try {
+    for (size_t i = 0; i < total; ++i) {
+      const ImageEntry& entry = seq.images[i];
+      ImageU8 gray = take(readImageU8(seq.imagePath(i), 1));
+      if (use_imu) next_imu = feedSequenceImu(seq, next_imu, entry.t_ns, *localizer);
+      Result<LocalizationResult> r = localizer->localize(entry.t_ns, gray);
+      if (!r.ok()) throw Failure{fmt::format("{}: frame {}: {}", seq.imagePath(i), i, r.error().message)};
+      const LocalizationResult& f = *r;
+      const bool tracking = f.state == TrackingState::kTracking;
+      const bool has_pose = tracking || f.state == TrackingState::kInertial;
+      if (tracking && first_tracked < 0) first_tracked = static_cast<long>(i);
+      lost_after_first += !has_pose && first_tracked >= 0;
+      inertial += f.state == TrackingState::kInertial;
+      rejected += f.visual_rejected;
+      if (has_pose) {
+        check(traj->appendLine(fmt::format("{} {}", seconds(entry.t_ns), formatPose(f.T_world_camera))));
+        estimate.push_back({entry.t_ns, f.T_world_camera});
       } else {
-        const size_t decile = (i + 1) * 10 / total;
-        if (decile > last_decile) {
-          last_decile = decile;
-          std::printf("frame %zu/%zu, %.1f fps, lost %zu, inertial %zu, re-rendered %zu\n", i + 1, total, fps, lost,
+        ++lost;
+      }
+      rerendered += f.reference_rendered;
+      check(frames->appendLine(fmt::format(
+          "{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{}",
+          entry.t_ns, trackingStateName(f.state), f.render_ms, f.reference_ms, f.live_ms, f.align_ms, f.total_ms,
+          f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used, f.quality.iterations,
+          f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio, f.quality.chance_inlier_ratio,
+          f.quality.scale_px, f.keyframe_id, f.keyframe_age_frames, f.keyframe_adopted ? 1 : 0)));
+      if (i == 0) {
+        first_frame_ms = f.total_ms;
+      } else {
+        total_ms.push_back(f.total_ms);
+      }
+      if (f.scene_depth_m > 0) depths.push_back(f.scene_depth_m);
+      if (!a.quiet) {
+        const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_frames).count();
+        const double fps = s > 0 ? static_cast<double>(i + 1) / s : 0.0;
+        if (tty) {
+          std::printf("\rframe %zu/%zu  %.1f fps  lost %zu  inertial %zu  re-rendered %zu", i + 1, total, fps, lost,
                       inertial, rerendered);
+          if (i + 1 == total) std::printf("\n");
           std::fflush(stdout);
+        } else {
+          const size_t decile = (i + 1) * 10 / total;
+          if (decile > last_decile) {
+            last_decile = decile;
+            std::printf("frame %zu/%zu, %.1f fps, lost %zu, inertial %zu, re-rendered %zu\n", i + 1, total, fps, lost,
+                        inertial, rerendered);
+            std::fflush(stdout);
+          }
         }
       }
     }
+  } catch (const Failure& failure) {
+    // Keep what was tracked, say where; the previous files at --out are untouched.
+    traj->keep();
+    frames->keep();
+    throw Failure{fmt::format("{} (the {} frames tracked before are kept in {} and {})", failure.message,
+                              frames->lines() - 1, traj->partialPath(), frames->partialPath())};
   }
+  check(traj->commit());
+  check(frames->commit());
   const double hz = total_ms.empty() ? 0.0 : 1000.0 / median(total_ms);
 
   // Evaluation against ground truth.
@@ -253,6 +250,10 @@ void addTrackOptions(CLI::App* cmd, const std::shared_ptr<TrackArgs>& args) {
       ->capture_default_str();
   cmd->add_option("--policy", args->policy, "Reference re-rendering: every-frame | when-needed")
       ->check(CLI::IsMember({"every-frame", "when-needed"}))
+      ->capture_default_str();
+  cmd->add_option("--keyframes", args->keyframes,
+                  "Where keyframes are made: worker (a thread beside tracking) | sync (deterministic)")
+      ->check(CLI::IsMember({"worker", "sync"}))
       ->capture_default_str();
   cmd->add_option("--motion", args->motion, "Pose prediction: constant-velocity | last-pose")->capture_default_str();
   cmd->add_option("--max-frames", args->max_frames, "Track only the first N images (0 = all)")->capture_default_str();

@@ -4,12 +4,16 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 
-#include "vkloc/demo.hpp"
-#include "vkloc/image.hpp"
-#include "vkloc/se3.hpp"
-#include "vkloc/sequence.hpp"
+#include "vkloc/core/image.hpp"
+#include "vkloc/core/se3.hpp"
+#include "vkloc/io/calibration.hpp"
+#include "vkloc/io/image_io.hpp"
+#include "vkloc/io/sequence.hpp"
+#include "vkloc/sim/demo_models.hpp"
 
 namespace vkloc::cli {
 
@@ -75,7 +79,19 @@ void DeviceArgs::add(CLI::App& app) {
 
 std::shared_ptr<GpuContext> DeviceArgs::create() const {
   GpuOptions options;
+  // The tool reads the environment; the library does not.
   options.device = device;
+  if (options.device.empty()) {
+    if (const char* env = std::getenv("VKLOC_DEVICE"); env) options.device = env;
+  }
+  if (const char* env = std::getenv("VKLOC_VALIDATION"); env && *env) options.validation = std::strcmp(env, "0") != 0;
+  options.on_validation_message = [](const std::string& m) {
+    std::fprintf(stderr, "vkloc: Vulkan validation: %s\n", m.c_str());
+  };
+  options.on_warning = [](const std::string& m) { std::fprintf(stderr, "vkloc: warning: %s\n", m.c_str()); };
+  // lavapipe allocates and frees multi-megabyte buffers per draw: a whole-process allocator
+  // setting the tool owns (GpuOptions::tune_allocator).
+  options.tune_allocator = true;
   return take(GpuContext::create(options));
 }
 

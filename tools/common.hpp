@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
-#include "vkloc/camera.hpp"
-#include "vkloc/gpu.hpp"
-#include "vkloc/localizer.hpp"
-#include "vkloc/model.hpp"
-#include "vkloc/pose.hpp"
+#include "vkloc/core/camera.hpp"
+#include "vkloc/core/pose.hpp"
+#include "vkloc/engine/gpu.hpp"
+#include "vkloc/localize/localizer.hpp"
+#include "vkloc/model/model.hpp"
 
 namespace vkloc {
 struct Sequence;

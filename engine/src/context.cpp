@@ -11,6 +11,8 @@
 #include <cstring>
 #include <string>
 
+#include "vkloc/core/text.hpp"
+
 namespace vkloc {
 namespace {
 
@@ -68,8 +70,8 @@ VKAPI_ATTR VkBool32 VKAPI_CALL debugCallback(VkDebugUtilsMessageSeverityFlagBits
       (types & (VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT)) != 0;
   if (counts) {
     impl->validation_messages.fetch_add(1);
-    if (impl->print_validation) {
-      std::fprintf(stderr, "vkloc: Vulkan validation: %s\n", data->pMessage ? data->pMessage : "(no message)");
+    if (impl->on_validation_message) {
+      impl->on_validation_message(text::oneLine(data->pMessage ? data->pMessage : "(no message)"));
     }
   }
   return VK_FALSE;
@@ -243,17 +245,13 @@ GpuContext::Impl::~Impl() {
 
 Result<std::shared_ptr<GpuContext>> GpuContext::create(const GpuOptions& options) {
   auto impl = std::make_unique<Impl>();
-  impl->print_validation = options.print_validation;
+  impl->on_validation_message = options.on_validation_message;
 
   bool validation = false;
 #ifdef VKLOC_DEBUG_BUILD
   validation = true;
 #endif
   bool validation_required = false;
-  if (const char* env = std::getenv("VKLOC_VALIDATION"); env && *env) {
-    validation = std::strcmp(env, "0") != 0;
-    validation_required = validation;
-  }
   if (options.validation >= 0) {
     validation = options.validation != 0;
     validation_required = validation;
@@ -264,7 +262,7 @@ Result<std::shared_ptr<GpuContext>> GpuContext::create(const GpuOptions& options
           ErrorCode::kNoDevice,
           "Vulkan validation requested but the layer is not installed: apt-get install vulkan-validationlayers");
     }
-    std::fprintf(stderr, "vkloc: warning: Vulkan validation layer not installed; running without it\n");
+    if (options.on_warning) options.on_warning("Vulkan validation layer not installed; running without it");
     validation = false;
   }
   impl->validation = validation;
@@ -284,11 +282,8 @@ Result<std::shared_ptr<GpuContext>> GpuContext::create(const GpuOptions& options
   std::vector<GpuDeviceInfo> infos;
   for (size_t i = 0; i < devices->size(); ++i) infos.push_back(describe((*devices)[i], static_cast<int>(i)));
 
-  // Selection: explicit option, else VKLOC_DEVICE, else best usable type.
-  std::string want = options.device;
-  if (want.empty()) {
-    if (const char* env = std::getenv("VKLOC_DEVICE"); env) want = env;
-  }
+  // Selection: explicit option, else the best usable type.
+  const std::string& want = options.device;
   int chosen = -1;
   if (!want.empty()) {
     const bool numeric = std::all_of(want.begin(), want.end(), [](unsigned char c) { return std::isdigit(c); });
@@ -485,9 +480,9 @@ Result<engine::Image> GpuContext::Impl::createImage(uint32_t width, uint32_t hei
   return out;
 }
 
-Result<VkCommandBuffer> GpuContext::Impl::allocateCommandBuffer() {
+Result<VkCommandBuffer> GpuContext::Impl::allocateCommandBuffer(VkCommandPool pool) {
   VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-  ai.commandPool = command_pool.get();
+  ai.commandPool = pool;
   ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
   ai.commandBufferCount = 1;
   VkCommandBuffer cmd = VK_NULL_HANDLE;
@@ -495,12 +490,33 @@ Result<VkCommandBuffer> GpuContext::Impl::allocateCommandBuffer() {
   return cmd;
 }
 
+Result<engine::DeviceHandle<VkCommandPool>> GpuContext::Impl::createCommandPool() {
+  VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pci.queueFamilyIndex = queue_family;
+  VkCommandPool pool = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateCommandPool(device, &pci, nullptr, &pool));
+  return engine::DeviceHandle<VkCommandPool>(device, pool, vkDestroyCommandPool);
+}
+
+Status GpuContext::Impl::submit(const VkSubmitInfo& si, VkFence fence) {
+  std::lock_guard<std::mutex> lock(queue_mutex);
+  VKLOC_VK(vkQueueSubmit(queue, 1, &si, fence));
+  return Status::success();
+}
+
+Status GpuContext::Impl::waitQueueIdle() {
+  std::lock_guard<std::mutex> lock(queue_mutex);
+  VKLOC_VK(vkQueueWaitIdle(queue));
+  return Status::success();
+}
+
 Status GpuContext::Impl::submitAndWait(VkCommandBuffer cmd, VkFence fence) {
   VKLOC_VK(vkResetFences(device, 1, &fence));
   VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   si.commandBufferCount = 1;
   si.pCommandBuffers = &cmd;
-  VKLOC_VK(vkQueueSubmit(queue, 1, &si, fence));
+  VKLOC_TRY_STATUS(submit(si, fence));
   VKLOC_VK(vkWaitForFences(device, 1, &fence, VK_TRUE, UINT64_MAX));
   return Status::success();
 }

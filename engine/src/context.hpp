@@ -3,10 +3,11 @@
 
 #include <atomic>
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 #include "vk_common.hpp"
-#include "vkloc/gpu.hpp"
+#include "vkloc/engine/gpu.hpp"
 
 namespace vkloc {
 
@@ -24,9 +25,15 @@ struct GpuContext::Impl {
   bool unified_memory = false;
   GpuDeviceInfo info;
   bool validation = false;
-  bool print_validation = true;
+  WarningHandler on_validation_message;
   std::atomic<uint64_t> validation_messages{0};
+  /// Pool of the one-off command buffers of runOnce (guarded by pool_mutex). Renderers and edge
+  /// stages record into pools of their own (createCommandPool), so that they can record on
+  /// different threads.
   engine::DeviceHandle<VkCommandPool> command_pool;
+  std::mutex pool_mutex;
+  /// Guards `queue`: every vkQueueSubmit of every object on this context goes through submit().
+  std::mutex queue_mutex;
 
   Impl() = default;
   ~Impl();
@@ -61,8 +68,19 @@ struct GpuContext::Impl {
   /// Copies RGBA8 pixels into an image and leaves it in SHADER_READ_ONLY_OPTIMAL.
   Status uploadImage(engine::Image& dst, const void* rgba, VkDeviceSize size);
 
-  /// Allocates a primary command buffer from the context's pool.
-  Result<VkCommandBuffer> allocateCommandBuffer();
+  /// A command pool for one object's command buffers (resettable buffers), used by the thread
+  /// that uses the object.
+  Result<engine::DeviceHandle<VkCommandPool>> createCommandPool();
+
+  /// Allocates a primary command buffer from `pool`.
+  Result<VkCommandBuffer> allocateCommandBuffer(VkCommandPool pool);
+
+  /// vkQueueSubmit of one submission under the queue lock.
+  Status submit(const VkSubmitInfo& submit_info, VkFence fence);
+
+  /// vkQueueWaitIdle under the queue lock (vkDeviceWaitIdle would race with other threads'
+  /// submissions).
+  Status waitQueueIdle();
 
   /// Records with `record`, submits and waits for completion.
   template <typename F>
@@ -74,7 +92,8 @@ struct GpuContext::Impl {
 
 template <typename F>
 Status GpuContext::Impl::runOnce(F&& record) {
-  Result<VkCommandBuffer> cmd = allocateCommandBuffer();
+  std::lock_guard<std::mutex> lock(pool_mutex);
+  Result<VkCommandBuffer> cmd = allocateCommandBuffer(command_pool.get());
   if (!cmd.ok()) return cmd.error();
   VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;

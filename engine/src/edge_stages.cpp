@@ -12,7 +12,7 @@
 #include "context.hpp"
 #include "edge_layout.h"
 #include "shader_registry.hpp"
-#include "vkloc/gpu_edges.hpp"
+#include "vkloc/engine/gpu_edges.hpp"
 
 namespace vkloc {
 
@@ -171,7 +171,8 @@ struct GpuEdgeStages::Impl {
   // Pixels per invocation of the Sobel, NMS and edge-lines kernels: 8 on CPU
   // drivers (one window read serves 8 pixels: lavapipe gathers lane by lane), 1 on GPUs.
   int32_t span = 1;
-  bool cpu_shapes = false;  // kernel shapes of CPU drivers (device type or VKLOC_KERNEL_SHAPES)
+  GpuKernelShapes kernel_shapes = GpuKernelShapes::kAuto;  // as asked for at creation
+  bool cpu_shapes = false;  // kernel shapes of CPU drivers (device type or kernel_shapes)
   /// Rows per invocation of kernel k (KernelSpec::rows_gpu / rows_cpu), >= 1.
   int32_t rowsPerInvocation(Kernel k) const {
     return std::max(cpu_shapes ? kKernels[k].rows_cpu : kKernels[k].rows_gpu, 1);
@@ -184,18 +185,17 @@ struct GpuEdgeStages::Impl {
   std::array<DeviceHandle<VkPipeline>, kKernelCount> pipelines;
   DeviceHandle<VkFence> fence;
   DeviceHandle<VkQueryPool> query_pool;
-  VkCommandBuffer cmd = VK_NULL_HANDLE;
-  double timestamp_ns = 0;     // ns per tick; 0 = no timestamps
-  bool stage_timings = false;  // write timestamps between stages (setStageTimings)
+  DeviceHandle<VkCommandPool> command_pool;  // this object's own: it records on its user's thread
+  VkCommandBuffer cmd = VK_NULL_HANDLE;      // from command_pool
+  double timestamp_ns = 0;                   // ns per tick; 0 = no timestamps
+  bool stage_timings = false;                // write timestamps between stages (setStageTimings)
   uint64_t timestamp_mask = ~0ull;
 
   // Timing of the current submission: query index -> stage whose end it marks.
   std::vector<std::string> marks;
   std::vector<GpuStageTiming> timings;
 
-  ~Impl() {
-    if (cmd != VK_NULL_HANDLE) vkFreeCommandBuffers(device, ctx->command_pool.get(), 1, &cmd);
-  }
+  ~Impl() {}
 
   Status init();
   Result<engine::Image> storageImage(int w, int h, VkFormat format);
@@ -238,16 +238,10 @@ Result<engine::Image> GpuEdgeStages::Impl::storageImage(int w, int h, VkFormat f
 
 Status GpuEdgeStages::Impl::init() {
   device = ctx->device;
-  cpu_shapes = ctx->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
-  // VKLOC_KERNEL_SHAPES=gpu|cpu overrides the device type's kernel shapes (so that the GPU
-  // variants are tested on lavapipe too).
-  if (const char* shapes = std::getenv("VKLOC_KERNEL_SHAPES"); shapes && *shapes) {
-    if (std::strcmp(shapes, "gpu") != 0 && std::strcmp(shapes, "cpu") != 0) {
-      return makeError(ErrorCode::kInvalidArgument,
-                       fmt::format("VKLOC_KERNEL_SHAPES is '{}': expected gpu or cpu", shapes));
-    }
-    cpu_shapes = std::strcmp(shapes, "cpu") == 0;
-  }
+  // The device type's kernel shapes unless the caller chose (the GPU variants are tested on
+  // lavapipe too).
+  cpu_shapes = kernel_shapes == GpuKernelShapes::kAuto ? ctx->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU
+                                                       : kernel_shapes == GpuKernelShapes::kCpu;
   wide_groups = cpu_shapes ? kGridGroups : kWideGridGroups;
   span = cpu_shapes ? 8 : 1;
   for (VkFormat f :
@@ -441,7 +435,10 @@ Status GpuEdgeStages::Impl::init() {
   VkFence f = VK_NULL_HANDLE;
   VKLOC_VK(vkCreateFence(device, &fci, nullptr, &f));
   fence = DeviceHandle<VkFence>(device, f, vkDestroyFence);
-  auto command = ctx->allocateCommandBuffer();
+  auto created_pool = ctx->createCommandPool();
+  if (!created_pool.ok()) return created_pool.error();
+  command_pool = std::move(*created_pool);
+  auto command = ctx->allocateCommandBuffer(command_pool.get());
   if (!command.ok()) return command.error();
   cmd = *command;
 
@@ -726,7 +723,8 @@ GpuEdgeStages::~GpuEdgeStages() = default;
 Result<std::unique_ptr<GpuEdgeStages>> GpuEdgeStages::create(std::shared_ptr<GpuContext> context,
                                                              const PinholeCamera& camera,
                                                              const LiveFrameOptions& options,
-                                                             GpuDistanceMethod distance_method) {
+                                                             GpuDistanceMethod distance_method,
+                                                             GpuKernelShapes kernel_shapes) {
   if (!context) return makeError(ErrorCode::kInvalidArgument, "GpuEdgeStages: no GPU context");
   VKLOC_TRY_STATUS(validateCamera(camera));
   VKLOC_TRY_STATUS(validateEdgeDetectorOptions(options.detector));
@@ -744,6 +742,7 @@ Result<std::unique_ptr<GpuEdgeStages>> GpuEdgeStages::create(std::shared_ptr<Gpu
   impl->ctx = &context->impl();
   impl->camera = camera;
   impl->options = options;
+  impl->kernel_shapes = kernel_shapes;
   const bool separable_fits = std::ceil(options.truncation_px) - 1 <= EDGE_EDT_MAX_RADIUS;
   if (distance_method == GpuDistanceMethod::kSeparable && !separable_fits) {
     return makeError(ErrorCode::kInvalidArgument,

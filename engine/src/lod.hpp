@@ -4,9 +4,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "vkloc/camera.hpp"
-#include "vkloc/model.hpp"
-#include "vkloc/pose.hpp"
+#include "vkloc/core/camera.hpp"
+#include "vkloc/core/pose.hpp"
+#include "vkloc/model/model.hpp"
 
 namespace vkloc::engine {
 

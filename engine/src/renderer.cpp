@@ -12,7 +12,7 @@
 #include "lod.hpp"
 #include "render_layout.h"
 #include "shader_registry.hpp"
-#include "vkloc/gpu.hpp"
+#include "vkloc/engine/gpu.hpp"
 
 namespace vkloc {
 
@@ -113,12 +113,12 @@ struct GpuRenderer::Impl {
   /// (unified memory: lavapipe, integrated GPUs); otherwise they are copied to a buffer.
   bool direct_readback = false;
   Targets targets;
-  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  DeviceHandle<VkCommandPool> command_pool;  // this object's own: it records on its user's thread
+  VkCommandBuffer cmd = VK_NULL_HANDLE;      // from command_pool
   DeviceHandle<VkFence> fence;
 
   ~Impl() {
-    if (device != VK_NULL_HANDLE) vkDeviceWaitIdle(device);
-    if (cmd != VK_NULL_HANDLE) vkFreeCommandBuffers(device, ctx->command_pool.get(), 1, &cmd);
+    if (device != VK_NULL_HANDLE) (void)ctx->waitQueueIdle();
   }
 
   Status init(const Model& model, const GpuRendererOptions& options);
@@ -271,7 +271,10 @@ Status GpuRenderer::Impl::init(const Model& model, const GpuRendererOptions& opt
   frag = std::move(*f);
   VKLOC_TRY_STATUS(createRenderPasses());
 
-  auto c = ctx->allocateCommandBuffer();
+  auto created_pool = ctx->createCommandPool();
+  if (!created_pool.ok()) return created_pool.error();
+  command_pool = std::move(*created_pool);
+  auto c = ctx->allocateCommandBuffer(command_pool.get());
   if (!c.ok()) return c.error();
   cmd = *c;
   VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
@@ -434,7 +437,7 @@ Status GpuRenderer::Impl::ensureTargets(uint32_t width, uint32_t height) {
                                  std::min(limits.maxFramebufferWidth, limits.maxImageDimension2D),
                                  std::min(limits.maxFramebufferHeight, limits.maxImageDimension2D)));
   }
-  vkDeviceWaitIdle(device);
+  VKLOC_TRY_STATUS(ctx->waitQueueIdle());
   targets = Targets{};
   const VkImageUsageFlags color_usage = kTargetUsage;
   // Linear targets may be limited to smaller sizes than optimal ones: fall back to the copy path.
@@ -699,6 +702,19 @@ Result<RenderOutput> GpuRenderer::readback() { return impl_->readback(); }
 Result<RenderOutput> GpuRenderer::renderOnGpu(const PinholeCamera& camera, const Pose& T_world_camera,
                                               const RenderSettings& settings) {
   return impl_->render(camera, T_world_camera, settings, false);
+}
+
+std::string GpuRenderer::describe() const {
+  const GpuDeviceInfo& d = impl_->context->device();
+  return fmt::format("Vulkan on {} ({})", d.name, d.type);
+}
+
+RendererFactory gpuRendererFactory(std::shared_ptr<GpuContext> context, const GpuRendererOptions& options) {
+  return [context, options](const Model& model) -> Result<std::unique_ptr<Renderer>> {
+    auto created = GpuRenderer::create(context, model, options);
+    if (!created.ok()) return created.error();
+    return std::unique_ptr<Renderer>(std::move(created).value());
+  };
 }
 
 }  // namespace vkloc

@@ -5,7 +5,7 @@
 
 #include <utility>
 
-#include "vkloc/status.hpp"
+#include "vkloc/core/status.hpp"
 
 namespace vkloc::engine {
 

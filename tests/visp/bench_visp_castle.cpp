@@ -84,13 +84,15 @@
 #include <string>
 #include <vector>
 
-#include "vkloc/eval.hpp"
-#include "vkloc/gpu.hpp"
-#include "vkloc/localizer.hpp"
-#include "vkloc/pose.hpp"
-#include "vkloc/sequence.hpp"
-#include "vkloc/status.hpp"
-#include "vkloc/visp.hpp"
+#include "vkloc/core/pose.hpp"
+#include "vkloc/core/status.hpp"
+#include "vkloc/engine/gpu.hpp"
+#include "vkloc/engine/gpu_accelerator.hpp"
+#include "vkloc/eval/eval.hpp"
+#include "vkloc/io/import.hpp"
+#include "vkloc/io/sequence.hpp"
+#include "vkloc/localize/localizer.hpp"
+#include "vkloc/model/cao.hpp"
 
 namespace {
 
@@ -400,7 +402,9 @@ vkloc::Result<VklocRun> runVkloc(const std::vector<Frame>& frames, const BenchOp
   VklocRun out;
   out.backend = backend;
   const auto t0 = std::chrono::steady_clock::now();
-  auto localizer = Localizer::create(*model, camera, lo, context);
+  auto accelerator = makeGpuAccelerator(context);
+  if (!accelerator) return accelerator.error();
+  auto localizer = Localizer::create(*model, camera, lo, *accelerator);
   if (!localizer) return localizer.error();
   out.create_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   out.summary = (*localizer)->backendSummary();

@@ -1,0 +1,112 @@
+// vkloc: keyframes (STAR, seed paper 001 sec. II-B): a model render at a chosen pose reduced to
+// the 3D edge points the tracker aligns (track/reference_edges.hpp), made by a KeyframeMaker on
+// the caller's thread or by a KeyframeWorker on a thread of its own, in parallel with tracking
+// (STAR's two processes, eqs. 1-2).
+#pragma once
+
+#include <array>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "vkloc/core/camera.hpp"
+#include "vkloc/core/pose.hpp"
+#include "vkloc/core/status.hpp"
+#include "vkloc/render/renderer.hpp"
+#include "vkloc/track/reference_edges.hpp"
+
+namespace vkloc {
+
+/// Which edge kinds a keyframe leaves out: [occlusion, crease, near background] (texture edges
+/// are always kept). See KeyframeManager's edge-kind learning.
+using EdgeKindMask = std::array<bool, 3>;
+
+/// What to make a keyframe of.
+struct KeyframeRequest {
+  Pose T_world_ref = Pose::Identity();  ///< Pose of the keyframe (virtual) camera.
+  int64_t t_ns = 0;                     ///< Frame time this pose was predicted for, nanoseconds.
+  int64_t frame_index = 0;              ///< Index of that frame (the Localizer's count; may lie ahead).
+  EdgeKindMask dropped_kinds{};         ///< Edge kinds left out.
+};
+
+/// A finished keyframe. Immutable once made; shared between the worker and the tracker.
+struct Keyframe {
+  uint64_t id = 0;           ///< 1, 2, ... in the order made.
+  KeyframeRequest request;   ///< What it was made of.
+  EdgeReference reference;   ///< Edge points per pyramid level, keyframe camera frame (T_world_ref).
+  double scene_depth_m = 0;  ///< Median depth of the render's surfaces, metres (0: nothing seen).
+  double render_ms = 0;      ///< Wall time of the render, ms.
+  double reference_ms = 0;   ///< Wall time of the edge-point extraction, ms.
+};
+
+/// Renders keyframes and extracts their edge points. Not thread-safe (one thread at a time).
+class KeyframeMaker {
+ public:
+  /// Takes the renderer over. `reference` levels are those of the live frame.
+  KeyframeMaker(std::unique_ptr<Renderer> renderer, const PinholeCamera& camera, const RenderSettings& render,
+                const ReferenceEdgeOptions& reference);
+  /// Renders colour, depth and normals at request.T_world_ref and builds the edge reference
+  /// without the dropped kinds. Renderer and extraction errors are returned as they are.
+  Result<std::shared_ptr<const Keyframe>> make(const KeyframeRequest& request);
+  /// The renderer's describe().
+  std::string describe() const { return renderer_->describe(); }
+
+ private:
+  std::unique_ptr<Renderer> renderer_;
+  PinholeCamera camera_;
+  RenderSettings render_;
+  ReferenceEdgeOptions reference_;
+  uint64_t next_id_ = 1;
+};
+
+/// A KeyframeMaker on a thread of its own. The tracking thread requests keyframes and picks up
+/// finished ones without waiting; only makeNow() waits. At most one keyframe is being made and
+/// one request waits; a new request replaces the waiting one. Thread-safety: all members may be
+/// called from any thread (typically the one tracking thread); the maker and its renderer are
+/// used by the worker thread only.
+class KeyframeWorker {
+ public:
+  explicit KeyframeWorker(std::unique_ptr<KeyframeMaker> maker);
+  /// Stops the thread after the keyframe in progress (a waiting request is dropped).
+  ~KeyframeWorker();
+  KeyframeWorker(const KeyframeWorker&) = delete;
+  KeyframeWorker& operator=(const KeyframeWorker&) = delete;
+
+  /// Queues a request (replacing one that has not started). Returns at once.
+  void request(const KeyframeRequest& request);
+  /// True while a request waits or a keyframe is being made.
+  bool busy() const;
+  /// The newest keyframe finished since the last call (older unclaimed ones are dropped), null
+  /// when none; the error of a failed request.
+  Result<std::shared_ptr<const Keyframe>> takeFinished();
+  /// Drops the waiting request and any finished keyframe not yet taken, then makes `request`
+  /// (after the keyframe in progress, which is dropped too) and waits for it.
+  Result<std::shared_ptr<const Keyframe>> makeNow(const KeyframeRequest& request);
+  /// Drops the waiting request and unclaimed results (reset, loss).
+  void discard();
+  std::string describe() const { return description_; }
+
+ private:
+  void run();
+  std::unique_ptr<KeyframeMaker> maker_;
+  std::string description_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;      ///< The worker waits on it for requests.
+  std::condition_variable finished_;  ///< makeNow waits on it for its keyframe.
+  std::optional<KeyframeRequest> pending_;
+  uint64_t pending_ticket_ = 0;  ///< Ticket of pending_.
+  uint64_t next_ticket_ = 1;
+  uint64_t running_ticket_ = 0;  ///< Ticket being made (0: idle).
+  uint64_t wanted_ticket_ = 0;   ///< makeNow's ticket: its result is kept for it alone.
+  uint64_t discard_below_ = 0;   ///< Results of tickets below this are dropped.
+  std::optional<Result<std::shared_ptr<const Keyframe>>> finished_result_;  ///< Unclaimed, for takeFinished.
+  uint64_t finished_ticket_ = 0;
+  std::optional<Result<std::shared_ptr<const Keyframe>>> wanted_result_;  ///< For makeNow.
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+}  // namespace vkloc

@@ -1,0 +1,170 @@
+// vkloc: frame-to-model localization, the product's main class. The data flow of one frame:
+//
+//   image --> edge backend: live stages (pyramid, edges, distance fields)
+//         --> alignment of the current keyframe's 3D edge points (seed 000 sec. IV-C) from the
+//             motion prior's guess (constant velocity, or the IMU: MotionPrior)
+//         --> initializer while nothing was tracked since create/reset (Initializer)
+//         --> the motion prior accepts the pose (gate) or bridges the frame
+//   keyframe manager: when the keyframe no longer fits, a new one is rendered at the predicted
+//   pose of a future frame on a worker thread while tracking goes on (STAR, seed 001 sec. II),
+//   or on the caller's thread in the synchronous mode.
+//
+// Backends: keyframes render on the Accelerator's device when one is given (else on the CPU
+// reference renderer); the live stages and the alignment run on the CPU (OpenCV / Eigen) or on
+// the device. No Vulkan types are exposed; the engine provides the Accelerator of a Vulkan
+// device (engine/gpu_accelerator.hpp).
+//
+// Frames and units: poses are T_world_camera (camera to world, metres; camera x right, y down,
+// z forward); covariances are of xi = [rho; phi] in the camera frame (m^2, rad^2); times are
+// int64 nanoseconds; durations in the result are milliseconds of wall time.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "vkloc/core/camera.hpp"
+#include "vkloc/core/image.hpp"
+#include "vkloc/core/pose.hpp"
+#include "vkloc/core/se3.hpp"
+#include "vkloc/core/status.hpp"
+#include "vkloc/fusion/sensors.hpp"
+#include "vkloc/localize/initializer.hpp"
+#include "vkloc/localize/keyframe_manager.hpp"
+#include "vkloc/localize/motion_prior.hpp"
+#include "vkloc/model/model.hpp"
+#include "vkloc/render/renderer.hpp"
+#include "vkloc/track/edge_backend.hpp"
+#include "vkloc/track/edge_tracker.hpp"
+#include "vkloc/track/live_frame.hpp"
+#include "vkloc/track/reference_edges.hpp"
+
+namespace vkloc {
+
+/// Where the live-image stages and the alignment run.
+enum class LocalizerBackend {
+  kAuto,    ///< The device on a real GPU; the CPU when the device is itself a CPU (lavapipe) or absent.
+  kVulkan,  ///< The Accelerator's edge backend (needs one).
+  kCpu,     ///< OpenCV / Eigen on the host.
+};
+
+/// Parses "auto" | "vulkan" | "cpu"; kInvalidArgument otherwise.
+Result<LocalizerBackend> parseLocalizerBackend(const std::string& name);
+const char* localizerBackendName(LocalizerBackend backend);
+
+/// Everything the Localizer can be tuned with. Plain data; checked by Localizer::create.
+struct LocalizerOptions {
+  LocalizerBackend backend = LocalizerBackend::kAuto;   ///< Backend of the live stages and alignment.
+  RerenderPolicy policy = RerenderPolicy::kWhenNeeded;  ///< When a keyframe is made anew.
+  RerenderThresholds rerender;                          ///< Thresholds of kWhenNeeded.
+  /// Keyframes on a worker thread beside tracking (default), or on the caller's thread
+  /// (deterministic: the same input gives the same output, for tests and debugging).
+  KeyframeThreading keyframe_threading = KeyframeThreading::kWorkerThread;
+  /// Worker mode: a keyframe is requested at the pose predicted for the frame at which it will
+  /// be ready (its measured making time over the measured time per frame), at most this many
+  /// frames ahead.
+  int max_keyframe_lead_frames = 4;
+  /// Near/far clip planes (metres) and back-face culling of keyframe renders; `outputs` is set
+  /// by the Localizer (colour, depth and normals are always rendered).
+  RenderSettings render;
+  LiveFrameOptions live;                                ///< Live-image pyramid, edges and distance fields.
+  ReferenceEdgeOptions reference;                       ///< Keyframe edge points (levels are set to live.levels).
+  EdgeTrackerOptions tracker;                           ///< Gauss-Newton alignment and lost-frame thresholds.
+  MotionModel motion = MotionModel::kConstantVelocity;  ///< Guess when the caller gives none.
+  /// When a frame is lost against an older keyframe (kWhenNeeded), render a fresh one at the
+  /// guess and align once more before reporting the frame lost.
+  bool retry_lost_with_fresh_reference = true;
+  /// Initializer (until the first frame is tracked after create/reset): refinements from fresh
+  /// keyframes, and the start-up search over rotations (see InitializerOptions).
+  int init_refinements = 4;
+  int init_search_steps = 1;
+  double init_search_deg = 4.0;               ///< Grid step of the start-up search, degrees.
+  double init_confident_inlier_ratio = 0.75;  ///< No start-up search at or above this inlier ratio.
+  /// Learn which geometric edge kinds the live images show (KeyframeManagerOptions).
+  bool adapt_edge_kinds = true;
+  double kind_visibility_ratio = 0.7;  ///< See adapt_edge_kinds (0..1).
+  /// Leave out of a frame's alignment the keyframe points that the predicted motion (last
+  /// tracked pose to the guess) moves more than this in the image, pixels (0 = keep all; not
+  /// applied when fewer than a fifth of a level's points, or fewer than 100, would remain):
+  /// surfaces passing close to the camera are smeared by motion blur and their edges alias onto
+  /// wrong ones.
+  double max_point_motion_px = 40.0;
+  InertialAiding inertial;  ///< IMU-propagated guesses and consistency gate (when readings are given).
+  /// With kAuto and an Accelerator: time the CPU and device live stages + alignment on the
+  /// first frame and keep the faster one (instead of deciding by the device type alone).
+  bool calibrate_backend = false;
+};
+
+/// Outcome of one localized frame.
+struct LocalizationResult {
+  int64_t t_ns = 0;                        ///< Frame time, nanoseconds.
+  Pose T_world_camera = Pose::Identity();  ///< Estimated pose (not trusted when lost).
+  /// Covariance of xi (m^2, rad^2, [rho; phi], live camera frame; see TrackResult::covariance).
+  Matrix6d covariance = Matrix6d::Zero();
+  TrackQuality quality;  ///< Alignment quality on the finest level.
+  /// kTracking: the visual alignment is trusted; kInertial: it was lost or disagreed with the
+  /// IMU, T_world_camera is the inertial prediction (InertialAiding); kLost: no trusted pose.
+  TrackingState state = TrackingState::kLost;
+  bool visual_rejected = false;     ///< The alignment tracked but lay outside the inertial gate.
+  double inertial_sigma_m = 0;      ///< 1-sigma of the inertial prediction, metres (0: none made).
+  bool reference_rendered = false;  ///< A keyframe was made on this call (the caller waited for it).
+  bool keyframe_adopted = false;    ///< Worker mode: a keyframe finished by the worker was taken up.
+  bool keyframe_requested = false;  ///< Worker mode: a new keyframe was requested after this frame.
+  uint64_t keyframe_id = 0;         ///< Keyframe the frame was tracked against (1, 2, ...).
+  /// Frames between the frame the keyframe's pose was made for and this one (negative: it was
+  /// made for a frame still to come).
+  int64_t keyframe_age_frames = 0;
+  int reference_points = 0;  ///< Edge points of the finest keyframe level.
+  double scene_depth_m = 0;  ///< Median depth of the keyframe render's surfaces, metres (0: none seen).
+  double render_ms = 0;      ///< Rendering keyframes on this call, ms (0 when none was made here).
+  double reference_ms = 0;   ///< Extracting their edge points, ms.
+  double live_ms = 0;        ///< Live pyramid, edges and distance fields, ms.
+  double align_ms = 0;       ///< Gauss-Newton alignment, ms.
+  double total_ms = 0;       ///< Whole localize() call, ms.
+};
+
+/// Tracks a camera through a model, one frame at a time. Thread-safety: one thread calls
+/// localize(), addImu(), reset() and backendSummary() (they are not reentrant); the keyframe
+/// worker the Localizer owns runs on its own thread and shares nothing else with the caller.
+class Localizer {
+ public:
+  /// Prepares the renderer and the edge backends (on `accelerator`'s device, or the CPU when it
+  /// is null). kInvalidArgument for a bad camera, invalid model or options out of range;
+  /// kNoDevice when backend kVulkan is asked for without an accelerator; the device's errors
+  /// (kGpuError) when it fails. The model is copied (uploaded) and not referenced afterwards.
+  static Result<std::unique_ptr<Localizer>> create(const Model& model, const PinholeCamera& camera,
+                                                   const LocalizerOptions& options,
+                                                   std::shared_ptr<Accelerator> accelerator);
+  ~Localizer();
+  Localizer(const Localizer&) = delete;
+  Localizer& operator=(const Localizer&) = delete;
+
+  /// Localizes an 8-bit gray image (camera size, 1 channel) taken at t_ns. The guess, when
+  /// given, replaces the motion prior's prediction. A lost frame is not an error (state kLost);
+  /// the next frame is predicted from the last tracked pose. Errors (kInvalidArgument): wrong
+  /// image size or channels, a non-finite or non-rigid guess, t_ns not after the previous
+  /// frame's, no guess and no pose yet (call reset() first); device errors as they come.
+  Result<LocalizationResult> localize(int64_t t_ns, const ImageU8& gray,
+                                      const std::optional<Pose>& T_world_camera_guess = std::nullopt);
+
+  /// Gives one IMU reading (body frame; InertialAiding). Readings up to a frame's time should be
+  /// given before the frame. kInvalidArgument for a non-finite reading or a time not after the
+  /// previous reading's (the reading is ignored; tracking goes on).
+  Status addImu(const ImuSample& sample);
+  /// Forgets the motion, the IMU readings and the keyframe and restarts from T_world_camera
+  /// (e.g. the known initial pose, or after relocalization). Timestamps may start over. An
+  /// invalid pose is ignored (the next localize() then needs a guess).
+  void reset(const Pose& T_world_camera);
+
+  /// One line: renderer, live/alignment backend and why it was chosen, keyframe policy and threading.
+  std::string backendSummary() const;
+
+  struct Impl;
+
+ private:
+  explicit Localizer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace vkloc

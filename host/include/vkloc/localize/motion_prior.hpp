@@ -1,0 +1,142 @@
+// vkloc: the Localizer's motion prior: the pose guess of each frame (the alignment's start),
+// whether a frame's visual pose agrees with the motion, and what a frame without a trusted
+// visual pose reports. ConstantVelocityPrior extrapolates the last two trusted poses;
+// InertialPrior adds IMU readings integrated from the accepted visual poses (the propagation
+// half of seed paper 000's filter, sec. IV-D) with a consistency gate. The error-state EKF
+// plugs in here as another MotionPrior.
+//
+// Frames: poses are T_world_camera (camera to world, metres); the IMU and its readings are in
+// the body frame, T_body_camera maps camera points into it. Times are int64 nanoseconds.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "vkloc/core/pose.hpp"
+#include "vkloc/core/se3.hpp"
+#include "vkloc/core/status.hpp"
+#include "vkloc/fusion/inertial_predictor.hpp"
+#include "vkloc/fusion/sensors.hpp"
+
+namespace vkloc {
+
+/// How the pose guess for a frame is predicted when there is no IMU prediction.
+enum class MotionModel {
+  kConstantVelocity,  ///< Last pose moved by the last inter-frame motion, scaled to the time step.
+  kLastPose,          ///< The last pose as it is.
+};
+
+/// Inertial aiding, active once IMU readings are given (Localizer::addImu): the guess for a frame
+/// is the IMU-propagated pose (InertialPredictor, fed with the accepted visual poses), a visual
+/// result farther from it than the gate is rejected, and a frame whose alignment is lost or
+/// rejected reports the inertial pose (state kInertial) for up to max_inertial_s after the last
+/// accepted visual pose. Gate: translation <= gate_depth_ratio x scene depth + gate_sigmas x
+/// sqrt(sigma_pred^2 + fit_rms^2) (InertialPrediction), rotation <= gate_rotation_deg.
+struct InertialAiding {
+  bool enabled = true;                    ///< Use readings given with addImu.
+  Pose T_body_camera = Pose::Identity();  ///< Camera frame into the body (IMU) frame, metres.
+  InertialOptions predictor;              ///< Gravity, velocity-fit window, uncertainty model.
+  double gate_depth_ratio = 0.005;        ///< Translation gate floor, fraction of the median scene depth.
+  double gate_sigmas = 4.0;               ///< Translation gate, prediction sigmas added to the floor.
+  double gate_rotation_deg = 1.5;         ///< Rotation gate, degrees.
+  double max_inertial_s = 2.0;            ///< Longest inertial-only stretch before frames are lost, seconds.
+};
+
+/// kInvalidArgument naming the field for values out of range.
+Status validateInertialAiding(const InertialAiding& aiding);
+
+/// A predicted camera pose.
+struct MotionPrediction {
+  Pose T_world_camera = Pose::Identity();
+  bool inertial = false;  ///< Propagated from IMU readings (else the motion model's extrapolation).
+  double sigma_m = 0;     ///< 1-sigma position error of an inertial prediction, metres (0 otherwise).
+  double fit_rms_m = 0;   ///< RMS of the visual poses about the fitted motion, metres (inertial only).
+};
+
+/// The pose a frame without a trusted visual pose reports.
+struct BridgedPose {
+  Pose T_world_camera = Pose::Identity();
+  Matrix6d covariance = Matrix6d::Zero();  ///< [rho; phi] in the camera frame, m^2 and rad^2.
+};
+
+/// Interface of the motion priors. Not thread-safe.
+class MotionPrior {
+ public:
+  virtual ~MotionPrior() = default;
+  /// One IMU reading, body frame, in time order. kInvalidArgument for a non-finite value or a
+  /// time not after the previous reading's (the reading is ignored). Priors without an IMU
+  /// model check and ignore readings.
+  virtual Status addImu(const ImuSample& sample) = 0;
+  /// The camera pose at t_ns (after the last frame's time), or nullopt before any pose is known.
+  virtual std::optional<MotionPrediction> predict(int64_t t_ns) const = 0;
+  /// Whether a trusted visual pose agrees with `prediction` (the inertial gate); `scene_depth_m`
+  /// is the keyframe's median depth (0 = unknown).
+  virtual bool consistent(const MotionPrediction& prediction, const Pose& T_world_camera,
+                          double scene_depth_m) const = 0;
+  /// The frame at t_ns has a trusted visual pose with its covariance (camera frame).
+  virtual void addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) = 0;
+  /// The frame at t_ns has no trusted visual pose; `prediction` was this frame's, `guess` its
+  /// alignment's start. Returns the pose to report (bridged by the IMU), or nullopt (lost).
+  virtual std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
+                                            const Pose& guess) = 0;
+  /// Forgets the motion (and IMU readings: timestamps may start over) and restarts from
+  /// T_world_camera, or from nothing when it is nullopt or invalid.
+  virtual void reset(const std::optional<Pose>& T_world_camera) = 0;
+  /// The last trusted (or bridged, or reset) camera pose.
+  virtual std::optional<Pose> lastPose() const = 0;
+};
+
+/// Constant velocity (or last pose) from the last two poses.
+class ConstantVelocityPrior final : public MotionPrior {
+ public:
+  explicit ConstantVelocityPrior(MotionModel model = MotionModel::kConstantVelocity) : model_(model) {}
+  Status addImu(const ImuSample& sample) override;
+  /// kConstantVelocity: the last inter-frame motion (camera frame) scaled to the time since the
+  /// last pose (up to 10 frame intervals; beyond, the last pose).
+  std::optional<MotionPrediction> predict(int64_t t_ns) const override;
+  bool consistent(const MotionPrediction&, const Pose&, double) const override { return true; }
+  void addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) override;
+  /// Keeps the last pose and its motion (the next guess extrapolates over the time since);
+  /// reports nothing.
+  std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
+                                    const Pose& guess) override;
+  void reset(const std::optional<Pose>& T_world_camera) override;
+  std::optional<Pose> lastPose() const override { return last_pose_; }
+
+  /// Moves the motion on by one pose at t_ns (the last one becomes the one before).
+  void push(int64_t t_ns, const Pose& T_world_camera);
+
+ private:
+  MotionModel model_;
+  std::optional<Pose> last_pose_;
+  std::optional<Pose> prev_pose_;
+  int64_t last_pose_t_ns_ = 0;
+  int64_t prev_pose_t_ns_ = 0;
+  std::optional<int64_t> last_imu_t_ns_;
+};
+
+/// InertialAiding over a constant-velocity prior (which predicts when the IMU cannot).
+class InertialPrior final : public MotionPrior {
+ public:
+  InertialPrior(const InertialAiding& aiding, MotionModel model);
+  Status addImu(const ImuSample& sample) override;
+  /// The IMU-propagated pose while aiding is enabled, readings were given, enough visual poses
+  /// were accepted and the last one is at most max_inertial_s old; else the motion model's.
+  std::optional<MotionPrediction> predict(int64_t t_ns) const override;
+  bool consistent(const MotionPrediction& prediction, const Pose& T_world_camera, double scene_depth_m) const override;
+  void addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) override;
+  /// With an inertial prediction: that pose (rotation covariance of the last accepted visual
+  /// pose, translation the prediction's), which also carries the motion model on.
+  std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
+                                    const Pose& guess) override;
+  void reset(const std::optional<Pose>& T_world_camera) override;
+  std::optional<Pose> lastPose() const override { return motion_.lastPose(); }
+
+ private:
+  InertialAiding aiding_;
+  ConstantVelocityPrior motion_;
+  InertialPredictor predictor_;
+  Matrix6d last_covariance_ = Matrix6d::Zero();  ///< Of the last accepted visual pose.
+};
+
+}  // namespace vkloc

@@ -1,0 +1,149 @@
+#include "vkloc/localize/keyframe.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+namespace vkloc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+/// Median of the positive depths of a render (metres); 0 when nothing is seen.
+double medianDepth(const ImageF32& depth) {
+  std::vector<float> values;
+  values.reserve(depth.data.size() / 4 + 1);
+  for (size_t i = 0; i < depth.data.size(); i += 4) {
+    if (depth.data[i] > 0.0f) values.push_back(depth.data[i]);
+  }
+  if (values.empty()) return 0.0;
+  auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  return *mid;
+}
+
+}  // namespace
+
+KeyframeMaker::KeyframeMaker(std::unique_ptr<Renderer> renderer, const PinholeCamera& camera,
+                             const RenderSettings& render, const ReferenceEdgeOptions& reference)
+    : renderer_(std::move(renderer)), camera_(camera), render_(render), reference_(reference) {
+  render_.outputs = kRenderAll;
+}
+
+Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeRequest& request) {
+  auto keyframe = std::make_shared<Keyframe>();
+  keyframe->request = request;
+  auto t0 = Clock::now();
+  Result<RenderOutput> view = renderer_->render(camera_, request.T_world_ref, render_);
+  if (!view.ok()) return view.error();
+  keyframe->render_ms = msSince(t0);
+  t0 = Clock::now();
+  keyframe->scene_depth_m = medianDepth(view->depth);
+  // The render's depth and normals are handed to the reference stage (no 5 MB copy).
+  Result<EdgeReference> reference = buildEdgeReference(std::move(*view), camera_, request.T_world_ref, reference_);
+  if (!reference.ok()) return reference.error();
+  const EdgeKindMask& drop = request.dropped_kinds;
+  if (drop[0] || drop[1] || drop[2]) {
+    auto dropped = [&](uint32_t kind) {
+      if (kind & kEdgeBackground) return drop[2];
+      return (drop[0] && kind == kEdgeOcclusion) || (drop[1] && kind == kEdgeCrease);
+    };
+    auto keep = [&](std::vector<EdgePoint>& points) {
+      points.erase(std::remove_if(points.begin(), points.end(), [&](const EdgePoint& p) { return dropped(p.kind); }),
+                   points.end());
+    };
+    keep(reference->points);
+    for (std::vector<EdgePoint>& level : reference->coarse_points) keep(level);
+  }
+  keyframe->reference = std::move(*reference);
+  keyframe->reference_ms = msSince(t0);
+  keyframe->id = next_id_++;
+  return std::shared_ptr<const Keyframe>(std::move(keyframe));
+}
+
+KeyframeWorker::KeyframeWorker(std::unique_ptr<KeyframeMaker> maker)
+    : maker_(std::move(maker)), description_(maker_->describe()) {
+  thread_ = std::thread([this] { run(); });
+}
+
+KeyframeWorker::~KeyframeWorker() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+    pending_.reset();
+  }
+  wake_.notify_all();
+  thread_.join();
+}
+
+void KeyframeWorker::run() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    wake_.wait(lock, [this] { return stop_ || pending_.has_value(); });
+    if (stop_) return;
+    const KeyframeRequest request = *pending_;
+    const uint64_t ticket = pending_ticket_;
+    pending_.reset();
+    running_ticket_ = ticket;
+    lock.unlock();
+    Result<std::shared_ptr<const Keyframe>> result = maker_->make(request);
+    lock.lock();
+    running_ticket_ = 0;
+    if (ticket == wanted_ticket_) {
+      wanted_result_ = std::move(result);
+    } else if (ticket >= discard_below_) {
+      finished_result_ = std::move(result);
+      finished_ticket_ = ticket;
+    }
+    finished_.notify_all();
+  }
+}
+
+void KeyframeWorker::request(const KeyframeRequest& request) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    pending_ = request;
+    pending_ticket_ = next_ticket_++;
+  }
+  wake_.notify_one();
+}
+
+bool KeyframeWorker::busy() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return pending_.has_value() || running_ticket_ != 0;
+}
+
+Result<std::shared_ptr<const Keyframe>> KeyframeWorker::takeFinished() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!finished_result_) return std::shared_ptr<const Keyframe>();
+  Result<std::shared_ptr<const Keyframe>> out = std::move(*finished_result_);
+  finished_result_.reset();
+  return out;
+}
+
+Result<std::shared_ptr<const Keyframe>> KeyframeWorker::makeNow(const KeyframeRequest& request) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  const uint64_t ticket = next_ticket_++;
+  discard_below_ = ticket;
+  finished_result_.reset();
+  pending_ = request;
+  pending_ticket_ = ticket;
+  wanted_ticket_ = ticket;
+  wanted_result_.reset();
+  wake_.notify_one();
+  finished_.wait(lock, [this] { return wanted_result_.has_value(); });
+  Result<std::shared_ptr<const Keyframe>> out = std::move(*wanted_result_);
+  wanted_result_.reset();
+  wanted_ticket_ = 0;
+  return out;
+}
+
+void KeyframeWorker::discard() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  pending_.reset();
+  discard_below_ = next_ticket_;
+  finished_result_.reset();
+}
+
+}  // namespace vkloc

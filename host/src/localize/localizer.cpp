@@ -1,0 +1,468 @@
+// The Localizer: one frame's data flow over its parts (see localizer.hpp).
+#include "vkloc/localize/localizer.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "vkloc/render/cpu_renderer.hpp"
+
+namespace vkloc {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
+
+InitializerOptions initializerOptions(const LocalizerOptions& o) {
+  InitializerOptions i;
+  i.refinements = o.init_refinements;
+  i.search_steps = o.init_search_steps;
+  i.search_deg = o.init_search_deg;
+  i.confident_inlier_ratio = o.init_confident_inlier_ratio;
+  return i;
+}
+
+KeyframeManagerOptions keyframeOptions(const LocalizerOptions& o) {
+  KeyframeManagerOptions k;
+  k.policy = o.policy;
+  k.thresholds = o.rerender;
+  k.threading = o.keyframe_threading;
+  k.adapt_edge_kinds = o.adapt_edge_kinds;
+  k.kind_visibility_ratio = o.kind_visibility_ratio;
+  return k;
+}
+
+Status validateOptions(const LocalizerOptions& o) {
+  const RerenderThresholds& r = o.rerender;
+  if (!finiteIn(r.max_translation_depth_ratio, 0.0, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.max_translation_depth_ratio must be >= 0");
+  }
+  if (!finiteIn(r.max_rotation_deg, 0.0, 360.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.max_rotation_deg must be in 0..360");
+  }
+  if (!finiteIn(r.min_inlier_ratio, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.min_inlier_ratio must be in 0..1");
+  }
+  if (!finiteIn(o.max_point_motion_px, 0.0, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: max_point_motion_px must be in 0..1e6");
+  }
+  if (!finiteIn(o.kind_visibility_ratio, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: kind_visibility_ratio must be in 0..1");
+  }
+  VKLOC_TRY_STATUS(validateInitializerOptions(initializerOptions(o)));
+  if (r.max_frames < 1) return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.max_frames must be >= 1");
+  if (o.max_keyframe_lead_frames < 0 || o.max_keyframe_lead_frames > 100) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: max_keyframe_lead_frames must be in 0..100");
+  }
+  VKLOC_TRY_STATUS(validateInertialAiding(o.inertial));
+  VKLOC_TRY_STATUS(validateRenderSettings(o.render));
+  VKLOC_TRY_STATUS(validateReferenceEdgeOptions(o.reference));
+  VKLOC_TRY_STATUS(validateEdgeTrackerOptions(o.tracker));
+  VKLOC_TRY_STATUS(validateEdgeDetectorOptions(o.live.detector));
+  if (o.live.levels < 1 || o.live.levels > 8) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: live.levels must be in 1..8");
+  }
+  if (!finiteIn(o.live.truncation_px, 1e-3, 16384.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: live.truncation_px must be in (0, 16384]");
+  }
+  return Status::success();
+}
+
+/// The keyframe without the points that the predicted motion from `last_pose` to `guess` moves
+/// more than max_px in the image (finest level), or nullopt when none is dropped or too few would
+/// remain (motion blur smears those points' edges).
+std::optional<EdgeReference> slowPoints(const EdgeReference& reference, const Pose& guess, const Pose& last_pose,
+                                        double max_px) {
+  const PinholeCamera& camera = reference.camera;
+  const Pose T_guess_ref = guess.inverse() * reference.T_world_ref;
+  const Pose T_last_ref = last_pose.inverse() * reference.T_world_ref;
+  auto motionPx = [&](const EdgePoint& p) {
+    const Eigen::Vector3d P(p.x, p.y, p.z);
+    const Eigen::Vector3d a = T_guess_ref * P;
+    const Eigen::Vector3d b = T_last_ref * P;
+    if (!(a.z() > 1e-6) || !(b.z() > 1e-6)) return std::numeric_limits<double>::infinity();
+    const double du = camera.fx * (a.x() / a.z() - b.x() / b.z());
+    const double dv = camera.fy * (a.y() / a.z() - b.y() / b.z());
+    return std::sqrt(du * du + dv * dv);
+  };
+  EdgeReference out;
+  out.camera = reference.camera;
+  out.T_world_ref = reference.T_world_ref;
+  size_t dropped = 0;
+  auto filter = [&](const std::vector<EdgePoint>& in, std::vector<EdgePoint>& kept) {
+    kept.reserve(in.size());
+    for (const EdgePoint& p : in) {
+      if (motionPx(p) <= max_px) kept.push_back(p);
+    }
+    dropped += in.size() - kept.size();
+    return 5 * kept.size() >= in.size() && kept.size() >= 100;
+  };
+  if (!filter(reference.points, out.points)) return std::nullopt;
+  out.coarse_points.resize(reference.coarse_points.size());
+  for (size_t k = 0; k < out.coarse_points.size(); ++k) {
+    if (!filter(reference.coarse_points[k], out.coarse_points[k])) return std::nullopt;
+  }
+  if (dropped == 0) return std::nullopt;
+  return out;
+}
+
+}  // namespace
+
+Result<LocalizerBackend> parseLocalizerBackend(const std::string& name) {
+  if (name == "auto") return LocalizerBackend::kAuto;
+  if (name == "vulkan") return LocalizerBackend::kVulkan;
+  if (name == "cpu") return LocalizerBackend::kCpu;
+  return makeError(ErrorCode::kInvalidArgument, fmt::format("backend '{}': expected auto, vulkan or cpu", name));
+}
+
+const char* localizerBackendName(LocalizerBackend backend) {
+  switch (backend) {
+    case LocalizerBackend::kAuto:
+      return "auto";
+    case LocalizerBackend::kVulkan:
+      return "vulkan";
+    case LocalizerBackend::kCpu:
+      return "cpu";
+  }
+  return "?";
+}
+
+struct Localizer::Impl {
+  LocalizerOptions options;
+  PinholeCamera camera;
+  std::unique_ptr<KeyframeManager> keyframes;
+  std::unique_ptr<MotionPrior> motion;
+  Initializer initializer{InitializerOptions{}};
+  std::unique_ptr<EdgeTrackingBackend> cpu_backend;
+  std::unique_ptr<EdgeTrackingBackend> device_backend;  ///< When the device runs (or may run) the edge stages.
+  EdgeTrackingBackend* active = nullptr;                ///< The backend frames are tracked on.
+  bool calibration_pending = false;
+  std::string device_name;  ///< The accelerator's, or "" without one.
+  std::string backend_reason;
+
+  std::optional<int64_t> last_t_ns;    ///< Last frame given to localize.
+  int64_t frame_index = -1;            ///< Frames given to localize since create.
+  bool tracked_since_reset = false;    ///< A frame was tracked since create/reset.
+  bool live_ready = false;             ///< The active backend holds the current image's live frame.
+  const Keyframe* uploaded = nullptr;  ///< Keyframe the backends hold (setKeyframe).
+  // Worker mode: running means of a keyframe's making time and of a frame's time on the
+  // caller's thread (ms), and the last frame interval (ns), for the request's lead.
+  double keyframe_ms_mean = 0;
+  double frame_ms_mean = 0;
+  int64_t frame_interval_ns = 0;
+
+  bool worker() const { return options.keyframe_threading == KeyframeThreading::kWorkerThread; }
+
+  /// Gives every backend the current keyframe's points when it changed.
+  Status uploadKeyframe() {
+    const Keyframe* current = keyframes->current().get();
+    if (current == uploaded || current == nullptr) return Status::success();
+    uploaded = nullptr;
+    VKLOC_TRY_STATUS(cpu_backend->setKeyframe(current->reference));
+    if (device_backend) VKLOC_TRY_STATUS(device_backend->setKeyframe(current->reference));
+    uploaded = current;
+    return Status::success();
+  }
+
+  /// Makes a keyframe at T_world_ref for this frame and waits for it.
+  Status makeKeyframe(const Pose& T_world_ref, int64_t t_ns, LocalizationResult& out) {
+    KeyframeRequest request;
+    request.T_world_ref = T_world_ref;
+    request.t_ns = t_ns;
+    request.frame_index = frame_index;
+    VKLOC_TRY_STATUS(keyframes->makeNow(request, out.render_ms, out.reference_ms));
+    out.reference_rendered = true;
+    return uploadKeyframe();
+  }
+
+  /// Live stages (once per image) + alignment on `backend` from `start`.
+  Result<TrackResult> align(EdgeTrackingBackend& backend, const ImageU8& gray, const Pose& start,
+                            LocalizationResult& out, bool& ready) {
+    const EdgeReference& reference = keyframes->current()->reference;
+    if (reference.points.size() < 6) {
+      // Nothing of the model is seen from the keyframe: a lost frame, not an error.
+      TrackResult lost;
+      lost.T_world_camera = start;
+      lost.T_camera_ref = start.inverse() * reference.T_world_ref;
+      return lost;
+    }
+    auto t0 = Clock::now();
+    if (!ready) {
+      VKLOC_TRY_STATUS(backend.setLiveImage(gray));
+      ready = true;
+      out.live_ms += msSince(t0);
+    }
+    t0 = Clock::now();
+    std::optional<EdgeReference> slow;
+    const std::optional<Pose> last_pose = motion->lastPose();
+    if (options.max_point_motion_px > 0 && last_pose && tracked_since_reset) {
+      slow = slowPoints(reference, start, *last_pose, options.max_point_motion_px);
+    }
+    Result<TrackResult> r = backend.align(slow ? *slow : reference, start, options.tracker);
+    out.align_ms += msSince(t0);
+    return r;
+  }
+
+  /// First-frame calibration of kAuto with calibrate_backend: run both and keep the faster.
+  Status calibrate(const ImageU8& gray, const Pose& guess) {
+    calibration_pending = false;
+    double best[2] = {0, 0};
+    EdgeTrackingBackend* backends[2] = {cpu_backend.get(), device_backend.get()};
+    for (int b = 0; b < 2; ++b) {
+      // Twice each: the first run includes shader compilation / allocation.
+      for (int run = 0; run < 2; ++run) {
+        LocalizationResult scratch;
+        bool ready = false;
+        Result<TrackResult> r = align(*backends[b], gray, guess, scratch, ready);
+        if (!r.ok()) return r.error();
+        best[b] = scratch.live_ms + scratch.align_ms;
+      }
+    }
+    active = best[1] < best[0] ? device_backend.get() : cpu_backend.get();
+    backend_reason = fmt::format("calibrated on the first frame: CPU {:.1f} ms, device {:.1f} ms", best[0], best[1]);
+    return Status::success();
+  }
+
+  /// Worker mode: after a frame, asks for the next keyframe when the pose the camera will have
+  /// once it is ready no longer fits the current one.
+  void requestNextKeyframe(int64_t t_ns, const Pose& fallback, LocalizationResult& out) {
+    int lead = 1;
+    if (keyframe_ms_mean > 0 && frame_ms_mean > 0) {
+      lead = static_cast<int>(std::ceil(keyframe_ms_mean / frame_ms_mean));
+    }
+    lead = std::clamp(lead, std::min(1, options.max_keyframe_lead_frames), options.max_keyframe_lead_frames);
+    const int64_t t_target = t_ns + lead * frame_interval_ns;
+    const std::optional<MotionPrediction> predicted = motion->predict(t_target);
+    const Pose T_target = predicted ? predicted->T_world_camera : fallback;
+    if (!keyframes->needsKeyframe(T_target)) return;
+    KeyframeRequest request;
+    request.T_world_ref = T_target;
+    request.t_ns = t_target;
+    request.frame_index = frame_index + lead;
+    out.keyframe_requested = keyframes->request(request);
+  }
+};
+
+Localizer::Localizer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Localizer::~Localizer() = default;
+
+Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const PinholeCamera& camera,
+                                                     const LocalizerOptions& options,
+                                                     std::shared_ptr<Accelerator> accelerator) {
+  VKLOC_TRY_STATUS(validateCamera(camera));
+  VKLOC_TRY_STATUS(validateOptions(options));
+  VKLOC_TRY_STATUS(validateModel(model));
+  auto impl = std::make_unique<Impl>();
+  impl->options = options;
+  // Pyramid levels nobody reads are not built: the tracker starts at coarsest_level and the
+  // far-points-first hypothesis at far_first_coarsest_level (-1: the live frame's coarsest).
+  const EdgeTrackerOptions& t = options.tracker;
+  if (t.coarsest_level >= 0 && (t.far_first_depth_quantile <= 0 || t.far_first_coarsest_level >= 0)) {
+    const int deepest = std::max(t.coarsest_level, t.far_first_depth_quantile > 0 ? t.far_first_coarsest_level : 0);
+    impl->options.live.levels = std::min(options.live.levels, std::max(deepest, t.finest_level) + 1);
+  }
+  impl->options.reference.levels = impl->options.live.levels;
+  impl->camera = camera;
+  impl->initializer = Initializer(initializerOptions(options));
+  impl->motion = std::make_unique<InertialPrior>(options.inertial, options.motion);
+
+  std::unique_ptr<Renderer> renderer;
+  if (accelerator) {
+    auto created = accelerator->createRenderer(model);
+    if (!created.ok()) return created.error();
+    renderer = std::move(created).value();
+    impl->device_name = accelerator->describe();
+  } else {
+    auto created = CpuRenderer::create(model);
+    if (!created.ok()) return created.error();
+    renderer = std::move(created).value();
+  }
+  auto maker =
+      std::make_unique<KeyframeMaker>(std::move(renderer), camera, impl->options.render, impl->options.reference);
+  impl->keyframes = std::make_unique<KeyframeManager>(std::move(maker), keyframeOptions(options));
+
+  auto cpu = CpuEdgeTrackingBackend::create(camera, impl->options.live);
+  if (!cpu.ok()) return cpu.error();
+  impl->cpu_backend = std::move(cpu).value();
+  bool on_device = false;
+  switch (options.backend) {
+    case LocalizerBackend::kCpu:
+      impl->backend_reason = "asked for";
+      break;
+    case LocalizerBackend::kVulkan:
+      if (!accelerator) {
+        return makeError(ErrorCode::kNoDevice, "Localizer: backend vulkan needs a Vulkan device (none given)");
+      }
+      on_device = true;
+      impl->backend_reason = "asked for";
+      break;
+    case LocalizerBackend::kAuto:
+      if (!accelerator) {
+        impl->backend_reason = "no Vulkan device";
+      } else if (options.calibrate_backend) {
+        impl->calibration_pending = true;
+        impl->backend_reason = "to be calibrated on the first frame";
+      } else if (accelerator->isCpuDriver()) {
+        impl->backend_reason = "the Vulkan device is a CPU driver, where OpenCV is several times faster";
+      } else {
+        on_device = true;
+        impl->backend_reason = "the Vulkan device is a GPU";
+      }
+      break;
+  }
+  if (accelerator && (on_device || impl->calibration_pending)) {
+    auto device = accelerator->createEdgeBackend(camera, impl->options.live);
+    if (!device.ok()) return device.error();
+    impl->device_backend = std::move(device).value();
+  }
+  impl->active = on_device ? impl->device_backend.get() : impl->cpu_backend.get();
+  return std::unique_ptr<Localizer>(new Localizer(std::move(impl)));
+}
+
+void Localizer::reset(const Pose& T_world_camera) {
+  Impl& m = *impl_;
+  m.keyframes->reset();
+  m.uploaded = nullptr;
+  m.last_t_ns.reset();
+  m.tracked_since_reset = false;
+  m.motion->reset(T_world_camera);  // timestamps may start over
+}
+
+Status Localizer::addImu(const ImuSample& sample) { return impl_->motion->addImu(sample); }
+
+std::string Localizer::backendSummary() const {
+  const Impl& m = *impl_;
+  const std::string where = m.calibration_pending ? "auto (not yet calibrated)" : m.active->describe();
+  std::string policy = rerenderPolicyName(m.options.policy);
+  if (m.options.policy == RerenderPolicy::kWhenNeeded) {
+    const RerenderThresholds& r = m.options.rerender;
+    policy += fmt::format(" (moved > {:g} x depth or > {:g} deg, inliers < {:g}, or {} frames)",
+                          r.max_translation_depth_ratio, r.max_rotation_deg, r.min_inlier_ratio, r.max_frames);
+  }
+  return fmt::format("render on {}; live edges + alignment on {} ({}); re-render {}, {}",
+                     m.keyframes->rendererDescription(), where, m.backend_reason, policy,
+                     m.worker() ? "keyframes on a worker thread" : "keyframes made synchronously");
+}
+
+Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray,
+                                               const std::optional<Pose>& T_world_camera_guess) {
+  const auto t_start = Clock::now();
+  Impl& m = *impl_;
+  if (gray.channels != 1 || gray.width != m.camera.width || gray.height != m.camera.height ||
+      gray.data.size() != static_cast<size_t>(gray.width) * gray.height) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("Localizer: image is {}x{} with {} channel(s); the camera needs {}x{} gray",
+                                 gray.width, gray.height, gray.channels, m.camera.width, m.camera.height));
+  }
+  if (m.last_t_ns && t_ns <= *m.last_t_ns) {
+    return makeError(
+        ErrorCode::kInvalidArgument,
+        fmt::format("Localizer: frame time {} ns is not after the previous frame's {} ns", t_ns, *m.last_t_ns));
+  }
+  if (T_world_camera_guess && !isValidPose(*T_world_camera_guess)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: the pose guess is not a finite rigid transform");
+  }
+  if (!T_world_camera_guess && !m.motion->lastPose()) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: no pose guess and no previous pose; call reset() first");
+  }
+  ++m.frame_index;
+  if (m.last_t_ns) m.frame_interval_ns = t_ns - *m.last_t_ns;
+
+  // 1. The guess: the caller's, else the motion prior's (IMU-propagated when it can).
+  const std::optional<MotionPrediction> prediction = m.motion->predict(t_ns);
+  const Pose guess = T_world_camera_guess ? *T_world_camera_guess : prediction->T_world_camera;
+  LocalizationResult out;
+  out.t_ns = t_ns;
+  out.T_world_camera = guess;
+
+  // 2. The keyframe: the newest the worker finished; made here (waiting) when there is none to
+  // track against (worker mode) or when the policy asks (synchronous mode).
+  if (m.worker()) {
+    Result<bool> adopted = m.keyframes->adoptFinished();
+    if (!adopted.ok()) return adopted.error();
+    if (*adopted) {
+      out.keyframe_adopted = true;
+      const Keyframe& k = *m.keyframes->current();
+      const double made_ms = k.render_ms + k.reference_ms;
+      m.keyframe_ms_mean = m.keyframe_ms_mean > 0 ? 0.7 * m.keyframe_ms_mean + 0.3 * made_ms : made_ms;
+      VKLOC_TRY_STATUS(m.uploadKeyframe());
+    }
+  }
+  const bool make_now = m.worker() ? m.keyframes->mustWait() : m.keyframes->needsKeyframe(guess);
+  if (make_now) VKLOC_TRY_STATUS(m.makeKeyframe(guess, t_ns, out));
+  if (m.calibration_pending) VKLOC_TRY_STATUS(m.calibrate(gray, guess));
+
+  // 3. Tracking: live stages and alignment against the keyframe.
+  m.live_ready = false;
+  auto alignFrom = [&](const Pose& start) { return m.align(*m.active, gray, start, out, m.live_ready); };
+  Result<TrackResult> aligned = alignFrom(guess);
+  if (!aligned.ok()) return aligned.error();
+  TrackResult track = std::move(aligned).value();
+  if (track.state == TrackingState::kLost && !out.reference_rendered && m.options.retry_lost_with_fresh_reference) {
+    VKLOC_TRY_STATUS(m.makeKeyframe(guess, t_ns, out));
+    Result<TrackResult> retry = alignFrom(guess);
+    if (!retry.ok()) return retry.error();
+    track = std::move(retry).value();
+  }
+  // 4. Start-up: widen the basin until a first frame is tracked.
+  if (!m.tracked_since_reset) {
+    InitializerSteps steps;
+    steps.align = alignFrom;
+    steps.rekey = [&](const Pose& T_world_ref) { return m.makeKeyframe(T_world_ref, t_ns, out); };
+    Result<TrackResult> refined = m.initializer.refine(guess, std::move(track), steps);
+    if (!refined.ok()) return refined.error();
+    track = std::move(refined).value();
+  }
+  m.last_t_ns = t_ns;
+  const Keyframe& keyframe = *m.keyframes->current();
+  out.quality = track.quality;
+  out.state = track.state;
+  out.T_world_camera = track.T_world_camera;
+  out.covariance = track.covariance;
+  out.reference_points = static_cast<int>(keyframe.reference.points.size());
+  out.scene_depth_m = keyframe.scene_depth_m;
+  out.keyframe_id = keyframe.id;
+  out.keyframe_age_frames = m.frame_index - keyframe.request.frame_index;
+
+  // 5. The motion prior takes the pose (consistency gate with the IMU) or bridges the frame.
+  if (prediction && prediction->inertial) {
+    out.inertial_sigma_m = prediction->sigma_m;
+    if (track.state == TrackingState::kTracking) {
+      out.visual_rejected = !m.motion->consistent(*prediction, track.T_world_camera, keyframe.scene_depth_m);
+    }
+  }
+  if (track.state == TrackingState::kTracking && !out.visual_rejected) {
+    m.motion->addVisualPose(t_ns, track.T_world_camera, track.covariance);
+    m.keyframes->frameTracked(track.quality);
+    m.tracked_since_reset = true;
+  } else {
+    m.keyframes->frameNotTracked();
+    const std::optional<BridgedPose> bridged = m.motion->bridge(t_ns, prediction, guess);
+    if (bridged) {
+      out.state = TrackingState::kInertial;
+      out.T_world_camera = bridged->T_world_camera;
+      out.covariance = bridged->covariance;
+    } else {
+      out.state = TrackingState::kLost;
+    }
+  }
+
+  // 6. Worker mode: the next keyframe, at the pose the camera will have when it is ready.
+  if (m.worker()) {
+    if (!out.reference_rendered) {
+      const double ms = msSince(t_start);
+      m.frame_ms_mean = m.frame_ms_mean > 0 ? 0.9 * m.frame_ms_mean + 0.1 * ms : ms;
+    }
+    m.requestNextKeyframe(t_ns, out.T_world_camera, out);
+  }
+  out.total_ms = msSince(t_start);
+  return out;
+}
+
+}  // namespace vkloc

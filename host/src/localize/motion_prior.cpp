@@ -1,0 +1,145 @@
+#include "vkloc/localize/motion_prior.hpp"
+
+#include <cmath>
+
+#include "vkloc/core/se3.hpp"
+
+namespace vkloc {
+namespace {
+
+bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
+
+double rotationDeg(const Eigen::Matrix3d& R) { return logSO3(R).norm() * 180.0 / M_PI; }
+
+}  // namespace
+
+Status validateInertialAiding(const InertialAiding& ia) {
+  if (!isValidPose(ia.T_body_camera)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: inertial.T_body_camera is not a finite rigid transform");
+  }
+  if (!finiteIn(ia.gate_depth_ratio, 0.0, 1e3) || !finiteIn(ia.gate_sigmas, 0.0, 1e3) ||
+      !finiteIn(ia.gate_rotation_deg, 0.0, 180.0) || !finiteIn(ia.max_inertial_s, 0.0, 1e4)) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "Localizer: need inertial.gate_depth_ratio and gate_sigmas in 0..1e3, gate_rotation_deg in "
+                     "0..180 and max_inertial_s in 0..1e4");
+  }
+  return validateInertialOptions(ia.predictor);
+}
+
+// --- ConstantVelocityPrior ----------------------------------------------------------------------
+
+Status ConstantVelocityPrior::addImu(const ImuSample& sample) {
+  if (!sample.gyro_body.allFinite() || !sample.accel_body.allFinite()) {
+    return makeError(ErrorCode::kInvalidArgument, "IMU reading: non-finite rate or acceleration");
+  }
+  if (last_imu_t_ns_ && sample.t_ns <= *last_imu_t_ns_) {
+    return makeError(ErrorCode::kInvalidArgument, "IMU reading: time " + std::to_string(sample.t_ns) +
+                                                      " ns is not after the previous reading's " +
+                                                      std::to_string(*last_imu_t_ns_) + " ns");
+  }
+  last_imu_t_ns_ = sample.t_ns;
+  return Status::success();
+}
+
+std::optional<MotionPrediction> ConstantVelocityPrior::predict(int64_t t_ns) const {
+  if (!last_pose_) return std::nullopt;
+  MotionPrediction p;
+  p.T_world_camera = *last_pose_;
+  if (model_ == MotionModel::kLastPose || !prev_pose_ || last_pose_t_ns_ <= prev_pose_t_ns_) return p;
+  // Constant velocity: the last inter-frame motion (camera frame) scaled to the time step.
+  const Vector6d xi = logSE3(prev_pose_->inverse() * *last_pose_);
+  const double scale =
+      static_cast<double>(t_ns - last_pose_t_ns_) / static_cast<double>(last_pose_t_ns_ - prev_pose_t_ns_);
+  if (!std::isfinite(scale) || scale <= 0 || scale > 10) return p;
+  p.T_world_camera = *last_pose_ * expSE3(scale * xi);
+  return p;
+}
+
+void ConstantVelocityPrior::push(int64_t t_ns, const Pose& T_world_camera) {
+  prev_pose_ = last_pose_;
+  prev_pose_t_ns_ = last_pose_t_ns_;
+  last_pose_ = T_world_camera;
+  last_pose_t_ns_ = t_ns;
+}
+
+void ConstantVelocityPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d&) {
+  push(t_ns, T_world_camera);
+}
+
+std::optional<BridgedPose> ConstantVelocityPrior::bridge(int64_t, const std::optional<MotionPrediction>&,
+                                                         const Pose& guess) {
+  // Keep the last trusted pose and its motion: the next guess extrapolates the last tracked
+  // velocity over the time since (up to 10 frame intervals), so a camera that keeps moving
+  // through a few untrackable frames is found again.
+  if (!last_pose_) last_pose_ = guess;
+  return std::nullopt;
+}
+
+void ConstantVelocityPrior::reset(const std::optional<Pose>& T_world_camera) {
+  prev_pose_.reset();
+  last_pose_.reset();
+  last_imu_t_ns_.reset();
+  if (T_world_camera && isValidPose(*T_world_camera)) last_pose_ = *T_world_camera;
+}
+
+// --- InertialPrior --------------------------------------------------------------------------------
+
+InertialPrior::InertialPrior(const InertialAiding& aiding, MotionModel model)
+    : aiding_(aiding), motion_(model), predictor_(aiding.predictor) {}
+
+Status InertialPrior::addImu(const ImuSample& sample) { return predictor_.addImu(sample); }
+
+std::optional<MotionPrediction> InertialPrior::predict(int64_t t_ns) const {
+  if (aiding_.enabled && predictor_.hasImu()) {
+    std::optional<InertialPrediction> inertial = predictor_.predict(t_ns);
+    if (inertial && inertial->since_fix_s <= aiding_.max_inertial_s) {
+      MotionPrediction p;
+      p.T_world_camera = inertial->T_world_body * aiding_.T_body_camera;
+      p.inertial = true;
+      p.sigma_m = inertial->sigma_m;
+      p.fit_rms_m = inertial->fit_rms_m;
+      return p;
+    }
+  }
+  return motion_.predict(t_ns);
+}
+
+bool InertialPrior::consistent(const MotionPrediction& prediction, const Pose& T_world_camera,
+                               double scene_depth_m) const {
+  if (!prediction.inertial) return true;
+  // Consistency gate: the visual pose must agree with the IMU-propagated one.
+  const Pose d = prediction.T_world_camera.inverse() * T_world_camera;
+  const double depth = scene_depth_m > 0 ? scene_depth_m : 1.0;
+  const double gate_m =
+      aiding_.gate_depth_ratio * depth + aiding_.gate_sigmas * std::hypot(prediction.sigma_m, prediction.fit_rms_m);
+  return !(d.translation().norm() > gate_m || rotationDeg(d.linear()) > aiding_.gate_rotation_deg);
+}
+
+void InertialPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) {
+  predictor_.addFix(t_ns, T_world_camera * aiding_.T_body_camera.inverse());
+  last_covariance_ = covariance;
+  motion_.addVisualPose(t_ns, T_world_camera, covariance);
+}
+
+std::optional<BridgedPose> InertialPrior::bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
+                                                 const Pose& guess) {
+  motion_.bridge(t_ns, prediction, guess);
+  if (!prediction || !prediction->inertial) return std::nullopt;
+  // The inertial pose carries the motion on: should the prediction expire (max_inertial_s), the
+  // constant-velocity guess continues from it, not from the last visual pose.
+  motion_.push(t_ns, prediction->T_world_camera);
+  // The last accepted frame's rotation uncertainty (gyro drift over max_inertial_s is far below
+  // it), the prediction's in translation.
+  BridgedPose out;
+  out.T_world_camera = prediction->T_world_camera;
+  out.covariance.bottomRightCorner<3, 3>() = last_covariance_.bottomRightCorner<3, 3>();
+  out.covariance.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() * (prediction->sigma_m * prediction->sigma_m);
+  return out;
+}
+
+void InertialPrior::reset(const std::optional<Pose>& T_world_camera) {
+  predictor_.reset();  // timestamps may start over
+  motion_.reset(T_world_camera);
+}
+
+}  // namespace vkloc

@@ -1,0 +1,85 @@
+// Private helpers shared by the model loaders (model_io.cpp, assimp_loader.cpp, gltf_loader.cpp,
+// draco_loader.cpp, cao.cpp) and the block builder (blocks.cpp).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "vkloc/model/model.hpp"
+
+namespace draco {
+class Mesh;
+class PointAttribute;
+}  // namespace draco
+
+namespace vkloc::model_detail {
+
+/// Most vertices, and most triangles, a loaded model may have (positions alone would take 3 GiB).
+constexpr size_t kMaxModelElements = size_t{1} << 28;
+
+/// One mesh part as a loader produces it, before it is merged into a Model: attributes of
+/// equal length (`uvs` / `colors` empty when absent), indices local to this primitive.
+struct Primitive {
+  std::vector<float> positions;   ///< x, y, z per vertex, model frame.
+  std::vector<float> uvs;         ///< u, v per vertex, (0, 0) at the image's top-left, or empty.
+  std::vector<uint8_t> colors;    ///< RGBA8 per vertex, or empty.
+  std::vector<uint32_t> indices;  ///< 3 per triangle, counter-clockwise seen from outside.
+  int material = 0;               ///< Index into the model's materials.
+};
+
+/// "<path>: <what>" as an Error, forced onto one line.
+Error fileError(ErrorCode code, const std::string& path, const std::string& what);
+
+/// `text` with line breaks and other control characters replaced by spaces.
+std::string oneLine(std::string text);
+
+/// Lower-case extension of `path` including the dot (".obj"), or "" when there is none.
+std::string lowerExtension(const std::string& path);
+
+/// Reads at most `max_bytes` from the start of a file. Errors name the path: kNotFound when it
+/// does not exist, kIoError when it is a directory or cannot be read.
+Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max_bytes = UINT64_MAX);
+
+/// Appends `prim` to `model` as one draw range, padding `uvs` (zeros) and `colors` (white) so
+/// they stay parallel to `positions`. Fails (kMalformedInput, message "<path>: <what>: ...")
+/// when an index is not below the primitive's vertex count, or kUnsupported when the model
+/// would exceed kMaxModelElements.
+Status appendPrimitive(Model& model, const Primitive& prim, const std::string& path, const std::string& what);
+
+/// Decodes an encoded image (PNG, JPEG, ...) into an RGBA8 texture (rows top to bottom).
+/// Refuses PNG/JPEG headers that claim far more pixels than `size` bytes can encode. Returns
+/// false with `error` set when the bytes are not a decodable image.
+bool decodeTexture(const uint8_t* data, size_t size, Texture& out, std::string& error);
+
+/// Recomputes every block's bounds from its triangles and `model.bounds` from the blocks (from
+/// all indexed vertices when there are no blocks).
+void updateBounds(Model& model);
+
+/// A colour channel 0..255 as a byte (rounded, clamped; NaN gives 0).
+inline uint8_t toByte(float v) {
+  return static_cast<uint8_t>(std::lround(std::isfinite(v) ? std::clamp(v, 0.0f, 255.0f) : 0.0f));
+}
+
+/// Format loaders. Each returns the geometry in the model frame with its materials and
+/// textures; loadModel then checks, places and blocks it. Warnings are one line each and start
+/// with the path.
+Result<Model> loadWithAssimp(const std::string& path, const std::string& ext, std::vector<std::string>& warnings);
+bool assimpReadsExtension(const std::string& ext);
+Result<Model> loadDrc(const std::string& path);
+Result<Model> loadGltf(const std::string& path, std::vector<std::string>& warnings);
+
+/// Decodes a Draco mesh after checking the stream's counts against its size. nullptr with
+/// `error` set (and `unsupported` for valid streams vkloc cannot use) otherwise.
+std::unique_ptr<draco::Mesh> decodeDracoMesh(const uint8_t* data, size_t size, std::string& error, bool& unsupported);
+
+/// Converts a decoded Draco mesh to a primitive. `flip_v` turns a bottom-left uv origin into the
+/// top-left one. Returns false with `error` set when an attribute cannot be read.
+bool dracoPrimitive(const draco::Mesh& mesh, const draco::PointAttribute* position, const draco::PointAttribute* uv,
+                    const draco::PointAttribute* color, bool flip_v, Primitive& prim, std::string& error);
+
+}  // namespace vkloc::model_detail

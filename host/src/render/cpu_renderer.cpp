@@ -1,0 +1,447 @@
+// CPU reference renderer: the test oracle for the GPU renderer.
+//
+// Conventions, shared with the GPU renderer (see render.hpp and camera.hpp):
+//  - Camera frame x right, y down, z forward. Pixel (i, j) is sampled at its centre, which has
+//    pinhole coordinates (u, v) = (i, j), u = fx x / z + cx, v = fy y / z + cy. In Vulkan
+//    framebuffer coordinates the same point is (i + 0.5, j + 0.5) = (u + 0.5, v + 0.5).
+//  - Triangles are clipped against the camera-frame plane z = near (Sutherland-Hodgman, giving
+//    0, 1 or 2 triangles); the far plane is a per-pixel test: depth > far is background.
+//  - Coverage: edge functions in double at pixel centres with the top-left fill rule, so a
+//    pixel centre exactly on an edge shared by two triangles is covered exactly once.
+//  - Depth test: strictly nearer camera z wins, so of equal depths the first drawn stays.
+//  - Attributes (uv, vertex colour) are interpolated perspective-correctly; depth is the exact
+//    camera z of the triangle's plane along the pixel's ray.
+//
+// Winding and back faces. Model triangles (a, b, c) are counter-clockwise seen from outside,
+// i.e. the outward normal is n = (b - a) x (c - a). A rigid transform (det R = +1) preserves
+// cross products, so in the camera frame n_c = (b_c - a_c) x (c_c - a_c), and the triangle is
+// seen from its front (outside) exactly when the camera centre lies on the side n_c points to:
+//     front  <=>  n_c . (0 - a_c) > 0  <=>  det[a_c b_c c_c] = a_c . (b_c x c_c) < 0.
+// With q = p / z = (x/z, y/z, 1), det[a b c] = z_a z_b z_c det[q_a q_b q_c], and in pixels
+// (u = fx x/z + cx, v = fy y/z + cy) the signed area
+//     A = (u_b - u_a)(v_c - v_a) - (u_c - u_a)(v_b - v_a) = fx fy det[q_a q_b q_c],
+// so for vertices in front of the camera (z > 0, fx, fy > 0):
+//     front-facing  <=>  A < 0.
+// A < 0 with u right and v down is a triangle that looks counter-clockwise on the screen as
+// displayed (v down): a CCW-from-outside triangle keeps its CCW look in the image; it is
+// "clockwise" only if (u, v) are read as a y-up Cartesian frame. Vulkan's polygon area is
+// a = -1/2 sum(x_i y_{i+1} - x_{i+1} y_i) = -A / 2 in framebuffer coordinates (a translation of
+// (u, v)), so with projectionMatrix() (no y flip) the GPU equivalent is
+// VK_FRONT_FACE_COUNTER_CLOCKWISE with VK_CULL_MODE_BACK_BIT. Clipping keeps vertex order and
+// all clipped vertices have z >= near > 0, so the test is decided once per triangle from the
+// camera-frame determinant; zero-area (edge-on) triangles cover no pixel either way.
+#include "vkloc/render/cpu_renderer.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace vkloc {
+namespace {
+
+/// Interpolated vertex attributes: texture u, v, then vertex colour r, g, b (0..1).
+constexpr int kAttributeCount = 5;
+
+/// A triangle corner in the camera frame with its interpolated attributes.
+struct ClipVertex {
+  Eigen::Vector3d p;                                ///< Camera frame, metres.
+  std::array<double, kAttributeCount> attribute{};  ///< See kAttributeCount.
+};
+
+/// A projected corner in pixel coordinates.
+struct ScreenVertex {
+  double u = 0;
+  double v = 0;
+};
+
+/// One triangle edge with its endpoints in a canonical (lexicographic) order, so that two
+/// triangles sharing the edge evaluate bit-identical edge functions, and the sign and
+/// top-left flag that turn it into this triangle's inside test.
+struct Edge {
+  double pu = 0, pv = 0;  ///< Canonical start point.
+  double du = 0, dv = 0;  ///< Canonical direction (end - start).
+  double sign = 1;        ///< +1 or -1: makes the value positive inside the triangle.
+  bool top_left = false;  ///< A centre exactly on the edge (value 0) is inside.
+
+  double eval(double u, double v) const { return sign * (du * (v - pv) - dv * (u - pu)); }
+};
+
+/// Signed area term A (twice the area) of the projected triangle, u right, v down.
+double signedArea(const ScreenVertex& a, const ScreenVertex& b, const ScreenVertex& c) {
+  return (b.u - a.u) * (c.v - a.v) - (c.u - a.u) * (b.v - a.v);
+}
+
+/// Builds the edge from `from` to `to` of a triangle with signed area `area` (nonzero).
+Edge makeEdge(const ScreenVertex& from, const ScreenVertex& to, double area) {
+  const bool forward = from.u < to.u || (from.u == to.u && from.v < to.v);
+  const ScreenVertex& p = forward ? from : to;
+  const ScreenVertex& q = forward ? to : from;
+  Edge e;
+  e.pu = p.u;
+  e.pv = p.v;
+  e.du = q.u - p.u;
+  e.dv = q.v - p.v;
+  // The directed edge function E(s) = (to - from) x (s - from) equals the signed area of
+  // (from, to, s): it has the sign of `area` inside the triangle.
+  const double direction = forward ? 1.0 : -1.0;
+  const double inside = area > 0 ? 1.0 : -1.0;
+  e.sign = direction * inside;
+  // Top-left rule in the orientation where inside is positive (A > 0, which looks clockwise
+  // on screen with v down): walking the edge in that order, a "left" edge goes up (dv < 0)
+  // and a "top" edge is horizontal going right (dv == 0, du > 0).
+  const double wu = (to.u - from.u) * inside;
+  const double wv = (to.v - from.v) * inside;
+  e.top_left = wv < 0 || (wv == 0 && wu > 0);
+  return e;
+}
+
+/// Bilinear texture lookup with REPEAT wrap; texel k's centre is at uv = (k + 0.5) / size
+/// and (0, 0) is the top-left of the image. Writes 0..1 RGB.
+void sampleBilinearRepeat(const Texture& tex, double s, double t, double rgb[3]) {
+  if (!std::isfinite(s)) s = 0;
+  if (!std::isfinite(t)) t = 0;
+  const double x = s * tex.width - 0.5;
+  const double y = t * tex.height - 0.5;
+  const double x0 = std::floor(x);
+  const double y0 = std::floor(y);
+  const double ax = x - x0;
+  const double ay = y - y0;
+  auto wrap = [](double k, int n) {
+    double m = std::fmod(k, static_cast<double>(n));
+    if (m < 0) m += n;
+    const int i = static_cast<int>(m);
+    return i >= n ? 0 : i;
+  };
+  const int xa = wrap(x0, tex.width);
+  const int xb = wrap(x0 + 1, tex.width);
+  const int ya = wrap(y0, tex.height);
+  const int yb = wrap(y0 + 1, tex.height);
+  auto texel = [&](int xi, int yi, int channel) -> double {
+    return tex.rgba[(static_cast<size_t>(yi) * tex.width + xi) * 4 + channel] / 255.0;
+  };
+  for (int ch = 0; ch < 3; ++ch) {
+    rgb[ch] = (1 - ay) * ((1 - ax) * texel(xa, ya, ch) + ax * texel(xb, ya, ch)) +
+              ay * ((1 - ax) * texel(xa, yb, ch) + ax * texel(xb, yb, ch));
+  }
+}
+
+/// Checks what the rasterizer indexes: attribute sizes, indices, ranges, blocks, materials,
+/// textures, finite positions and uvs. Returns a one-line message, empty when fine.
+std::string checkModel(const Model& m) {
+  if (m.positions.size() % 3 != 0) return "model: positions size is not a multiple of 3";
+  if (m.indices.size() % 3 != 0) return "model: index count is not a multiple of 3";
+  const size_t nv = m.vertexCount();
+  if (!m.uvs.empty() && m.uvs.size() != nv * 2) return "model: uvs size does not match the vertex count";
+  if (!m.colors.empty() && m.colors.size() != nv * 4) {
+    return "model: colors size does not match the vertex count";
+  }
+  for (size_t i = 0; i < m.positions.size(); ++i) {
+    if (!std::isfinite(m.positions[i])) return fmt::format("model: vertex {} is not finite", i / 3);
+  }
+  for (size_t i = 0; i < m.uvs.size(); ++i) {
+    if (!std::isfinite(m.uvs[i])) return fmt::format("model: uv of vertex {} is not finite", i / 2);
+  }
+  for (size_t i = 0; i < m.indices.size(); ++i) {
+    if (m.indices[i] >= nv) {
+      return fmt::format("model: index {} = {} is out of range ({} vertices)", i, m.indices[i], nv);
+    }
+  }
+  for (size_t r = 0; r < m.ranges.size(); ++r) {
+    const DrawRange& dr = m.ranges[r];
+    if (dr.index_count % 3 != 0 || static_cast<uint64_t>(dr.first_index) + dr.index_count > m.indices.size()) {
+      return fmt::format("model: draw range {} lies outside the index buffer", r);
+    }
+    if (!m.materials.empty() && (dr.material < 0 || dr.material >= static_cast<int>(m.materials.size()))) {
+      return fmt::format("model: draw range {} uses missing material {}", r, dr.material);
+    }
+  }
+  for (size_t b = 0; b < m.blocks.size(); ++b) {
+    const Block& bl = m.blocks[b];
+    if (static_cast<uint64_t>(bl.first_range) + bl.range_count > m.ranges.size()) {
+      return fmt::format("model: block {} refers to missing draw ranges", b);
+    }
+  }
+  for (size_t k = 0; k < m.materials.size(); ++k) {
+    const int t = m.materials[k].texture;
+    if (t < 0) continue;
+    if (t >= static_cast<int>(m.textures.size())) {
+      return fmt::format("model: material {} uses missing texture {}", k, t);
+    }
+    const Texture& tex = m.textures[t];
+    if (tex.width <= 0 || tex.height <= 0 || tex.rgba.size() != static_cast<size_t>(tex.width) * tex.height * 4) {
+      return fmt::format("model: texture {} ('{}') has inconsistent size", t, tex.name);
+    }
+  }
+  return {};
+}
+
+/// The rasterizer state for one render.
+class Rasterizer {
+ public:
+  Rasterizer(const Model& model, const PinholeCamera& camera, const RenderSettings& settings,
+             const Pose& T_camera_world, RenderOutput& out)
+      : model_(model),
+        cam_(camera),
+        settings_(settings),
+        out_(out),
+        depth_(static_cast<size_t>(camera.width) * camera.height, std::numeric_limits<double>::infinity()) {
+    const size_t nv = model.vertexCount();
+    p_camera_.resize(nv);
+    for (size_t i = 0; i < nv; ++i) {
+      const Eigen::Vector3d p(model.positions[3 * i], model.positions[3 * i + 1], model.positions[3 * i + 2]);
+      p_camera_[i] = T_camera_world * p;
+    }
+  }
+
+  /// Draws triangles [first, first + count) of the index buffer with one material.
+  void drawRange(uint32_t first_index, uint32_t index_count, const Material& material) {
+    const Texture* tex = material.texture >= 0 ? &model_.textures[material.texture] : nullptr;
+    const std::array<double, 3> base = {material.base_color[0], material.base_color[1], material.base_color[2]};
+    for (uint32_t k = 0; k + 3 <= index_count; k += 3) {
+      const uint32_t* t = &model_.indices[first_index + k];
+      drawTriangle(t[0], t[1], t[2], tex, base);
+    }
+  }
+
+  /// Writes the double depth buffer into the float output.
+  void finish() {
+    for (size_t i = 0; i < depth_.size(); ++i) {
+      out_.depth.data[i] = std::isfinite(depth_[i]) ? static_cast<float>(depth_[i]) : kBackgroundDepth;
+    }
+  }
+
+ private:
+  ClipVertex vertex(uint32_t index) const {
+    ClipVertex c;
+    c.p = p_camera_[index];
+    if (!model_.uvs.empty()) {  // Without uvs a texture is sampled at uv (0, 0).
+      c.attribute[0] = model_.uvs[2 * static_cast<size_t>(index)];
+      c.attribute[1] = model_.uvs[2 * static_cast<size_t>(index) + 1];
+    }
+    for (int ch = 0; ch < 3; ++ch) {
+      c.attribute[2 + ch] = model_.colors.empty() ? 1.0 : model_.colors[4 * static_cast<size_t>(index) + ch] / 255.0;
+    }
+    return c;
+  }
+
+  void drawTriangle(uint32_t ia, uint32_t ib, uint32_t ic, const Texture* tex, const std::array<double, 3>& base) {
+    const ClipVertex tri[3] = {vertex(ia), vertex(ib), vertex(ic)};
+    // Face normal and plane (camera frame) of the whole triangle; see the file comment.
+    const Eigen::Vector3d n = (tri[1].p - tri[0].p).cross(tri[2].p - tri[0].p);
+    const double plane_d = n.dot(tri[0].p);  // n . p for points p on the plane.
+    if (settings_.cull_back_faces && !(plane_d < 0)) return;
+    const double n_norm = n.norm();
+    if (!(n_norm > 0) || !std::isfinite(n_norm)) return;  // Degenerate: covers nothing.
+    // Orient towards the camera: n . p < 0 on the surface.
+    const Eigen::Vector3f normal = ((plane_d > 0 ? -1.0 : 1.0) / n_norm * n).cast<float>();
+
+    // Sutherland-Hodgman against z >= near. A new vertex on an edge is always interpolated
+    // from the inside endpoint towards the outside one, so both triangles sharing the edge get
+    // the bit-identical vertex (no cracks).
+    const double near = settings_.near_m;
+    ClipVertex poly[4];
+    int count = 0;
+    for (int k = 0; k < 3; ++k) {
+      const ClipVertex& a = tri[k];
+      const ClipVertex& b = tri[(k + 1) % 3];
+      const bool a_in = a.p.z() >= near;
+      const bool b_in = b.p.z() >= near;
+      if (a_in) poly[count++] = a;
+      if (a_in != b_in) {
+        const ClipVertex& in = a_in ? a : b;
+        const ClipVertex& outv = a_in ? b : a;
+        const double t = (near - in.p.z()) / (outv.p.z() - in.p.z());
+        ClipVertex c;
+        c.p = in.p + t * (outv.p - in.p);
+        c.p.z() = near;
+        for (int m = 0; m < kAttributeCount; ++m) {
+          c.attribute[m] = in.attribute[m] + t * (outv.attribute[m] - in.attribute[m]);
+        }
+        poly[count++] = c;
+      }
+    }
+    if (count < 3) return;
+    for (int k = 1; k + 1 < count; ++k) {
+      rasterize(poly[0], poly[k], poly[k + 1], n, plane_d, normal, tex, base);
+    }
+  }
+
+  /// Rasterizes one triangle with all vertices at z >= near.
+  void rasterize(const ClipVertex& a, const ClipVertex& b, const ClipVertex& c, const Eigen::Vector3d& plane_n,
+                 double plane_d, const Eigen::Vector3f& normal, const Texture* tex, const std::array<double, 3>& base) {
+    const ClipVertex* corner[3] = {&a, &b, &c};
+    ScreenVertex s[3];
+    double inv_z[3];
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d& p = corner[k]->p;
+      inv_z[k] = 1.0 / p.z();
+      s[k].u = cam_.fx * p.x() * inv_z[k] + cam_.cx;
+      s[k].v = cam_.fy * p.y() * inv_z[k] + cam_.cy;
+      if (!std::isfinite(s[k].u) || !std::isfinite(s[k].v)) return;
+    }
+    const double area = signedArea(s[0], s[1], s[2]);
+    if (area == 0 || !std::isfinite(area)) return;
+    // Edge k is opposite corner k; its value is corner k's (unnormalised) barycentric.
+    const Edge edge[3] = {makeEdge(s[1], s[2], area), makeEdge(s[2], s[0], area), makeEdge(s[0], s[1], area)};
+
+    const double u_min = std::min({s[0].u, s[1].u, s[2].u});
+    const double u_max = std::max({s[0].u, s[1].u, s[2].u});
+    const double v_min = std::min({s[0].v, s[1].v, s[2].v});
+    const double v_max = std::max({s[0].v, s[1].v, s[2].v});
+    const double i_lo = std::max(0.0, std::ceil(u_min));
+    const double i_hi = std::min(static_cast<double>(cam_.width - 1), std::floor(u_max));
+    const double j_lo = std::max(0.0, std::ceil(v_min));
+    const double j_hi = std::min(static_cast<double>(cam_.height - 1), std::floor(v_max));
+    if (i_lo > i_hi || j_lo > j_hi) return;
+
+    const double nx = plane_n.x();
+    const double ny = plane_n.y();
+    const double nz = plane_n.z();
+    const int w = cam_.width;
+    for (int j = static_cast<int>(j_lo); j <= static_cast<int>(j_hi); ++j) {
+      const double v = j;
+      const double ray_y = (v - cam_.cy) / cam_.fy;
+      for (int i = static_cast<int>(i_lo); i <= static_cast<int>(i_hi); ++i) {
+        const double u = i;
+        double e[3];
+        bool inside = true;
+        for (int k = 0; k < 3 && inside; ++k) {
+          e[k] = edge[k].eval(u, v);
+          inside = e[k] > 0 || (e[k] == 0 && edge[k].top_left);
+        }
+        if (!inside) continue;
+        // Exact camera z: the pixel ray (x/z, y/z, 1) meets the plane n . p = plane_d.
+        const double ray_x = (u - cam_.cx) / cam_.fx;
+        const double z = plane_d / (nx * ray_x + ny * ray_y + nz);
+        if (!(z > 0) || z > settings_.far_m) continue;
+        const size_t idx = static_cast<size_t>(j) * w + i;
+        if (!(z < depth_[idx])) continue;
+        depth_[idx] = z;
+        if (!out_.normals.empty()) {
+          for (int ch = 0; ch < 3; ++ch) out_.normals.data[idx * 3 + ch] = normal[ch];
+        }
+        // Perspective-correct barycentrics: screen barycentrics e_k / sum(e) weighted by 1/z_k.
+        const double e_sum = e[0] + e[1] + e[2];
+        double wk[3];
+        double w_sum = 0;
+        for (int k = 0; k < 3; ++k) {
+          wk[k] = (e_sum > 0 ? e[k] / e_sum : 1.0 / 3.0) * inv_z[k];
+          w_sum += wk[k];
+        }
+        double attr[kAttributeCount];
+        for (int m = 0; m < kAttributeCount; ++m) {
+          attr[m] = (wk[0] * a.attribute[m] + wk[1] * b.attribute[m] + wk[2] * c.attribute[m]) / w_sum;
+        }
+        double tex_rgb[3] = {1.0, 1.0, 1.0};
+        if (tex != nullptr) sampleBilinearRepeat(*tex, attr[0], attr[1], tex_rgb);
+        // output = round(255 * texture * vertex colour * base colour), all plain 0..1 values.
+        uint8_t* px = &out_.rgba.data[idx * 4];
+        for (int ch = 0; ch < 3; ++ch) {
+          const double value = std::clamp(tex_rgb[ch] * attr[2 + ch] * base[ch], 0.0, 1.0) * 255.0;
+          px[ch] = static_cast<uint8_t>(std::lround(value));
+        }
+        px[3] = 255;
+      }
+    }
+  }
+
+  const Model& model_;
+  const PinholeCamera& cam_;
+  const RenderSettings& settings_;
+  RenderOutput& out_;
+  std::vector<Eigen::Vector3d> p_camera_;  ///< Vertices in the camera frame.
+  std::vector<double> depth_;              ///< Camera z per pixel, +inf where empty.
+};
+
+}  // namespace
+
+Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& camera, const Pose& T_world_camera,
+                                     const RenderSettings& settings) {
+  if (Status valid = validateCamera(camera); !valid.ok()) return valid.error();
+  if (!isValidPose(T_world_camera)) {
+    return makeError(ErrorCode::kInvalidArgument, "renderReference: T_world_camera is not a finite rigid transform");
+  }
+  if (Status valid = validateRenderSettings(settings); !valid.ok()) return valid.error();
+  if (std::string problem = checkModel(model); !problem.empty()) {
+    return makeError(ErrorCode::kInvalidArgument, problem);
+  }
+
+  const int w = camera.width;
+  const int h = camera.height;
+  RenderOutput out;
+  out.rgba = ImageU8(w, h, 4);
+  for (size_t i = 0; i < out.rgba.data.size(); i += 4) {
+    std::copy(settings.background_rgba.begin(), settings.background_rgba.end(), &out.rgba.data[i]);
+  }
+  out.depth = ImageF32(w, h, 1, kBackgroundDepth);
+  if (settings.outputs & kRenderNormals) out.normals = ImageF32(w, h, 3, 0.0f);
+
+  const Pose T_camera_world = T_world_camera.inverse(Eigen::Isometry);
+  Rasterizer raster(model, camera, settings, T_camera_world, out);
+  const Material default_material;
+  auto materialOf = [&](int index) -> const Material& {
+    return model.materials.empty() ? default_material : model.materials[index];
+  };
+  auto drawRanges = [&](uint32_t first_range, uint32_t range_count) {
+    for (uint32_t r = first_range; r < first_range + range_count; ++r) {
+      const DrawRange& dr = model.ranges[r];
+      out.triangles_drawn += dr.index_count / 3;
+      raster.drawRange(dr.first_index, dr.index_count, materialOf(dr.material));
+    }
+  };
+
+  if (!model.blocks.empty()) {
+    for (const Block& block : model.blocks) {
+      if (!aabbInFrustumFromCamera(block.bounds, camera, T_camera_world, settings.near_m, settings.far_m)) {
+        continue;
+      }
+      ++out.blocks_drawn;
+      drawRanges(block.first_range, block.range_count);
+    }
+  } else if (!model.indices.empty()) {
+    // A model without blocks (e.g. built by hand) is drawn as one block over all its ranges,
+    // or over all its triangles with the first material when it has no ranges either.
+    Aabb bounds;
+    for (size_t i = 0; i < model.vertexCount(); ++i) bounds.extend(&model.positions[3 * i]);
+    if (aabbInFrustum(bounds, camera, T_world_camera, settings.near_m, settings.far_m)) {
+      ++out.blocks_drawn;
+      if (!model.ranges.empty()) {
+        drawRanges(0, static_cast<uint32_t>(model.ranges.size()));
+      } else {
+        const auto n = static_cast<uint32_t>(model.indices.size());
+        out.triangles_drawn += n / 3;
+        raster.drawRange(0, n, materialOf(0));
+      }
+    }
+  }
+  raster.finish();
+  out.gray = rgbaToGray(out.rgba);
+  return out;
+}
+
+Result<std::unique_ptr<CpuRenderer>> CpuRenderer::create(const Model& model) {
+  VKLOC_TRY_STATUS(validateModel(model));
+  return std::unique_ptr<CpuRenderer>(new CpuRenderer(std::make_shared<const Model>(model)));
+}
+
+Result<RenderOutput> CpuRenderer::render(const PinholeCamera& camera, const Pose& T_world_camera,
+                                         const RenderSettings& settings) {
+  return renderReference(*model_, camera, T_world_camera, settings);
+}
+
+std::string CpuRenderer::describe() const { return "the CPU reference rasterizer"; }
+
+RendererFactory cpuRendererFactory() {
+  return [](const Model& model) -> Result<std::unique_ptr<Renderer>> {
+    auto created = CpuRenderer::create(model);
+    if (!created.ok()) return created.error();
+    return std::unique_ptr<Renderer>(std::move(created).value());
+  };
+}
+
+}  // namespace vkloc

@@ -1,0 +1,143 @@
+// The Canny-like edge detector (Sobel / 8, contrast quantile, NMS, hysteresis) on the CPU.
+#include "vkloc/track/edge_detector.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+#include "track/edges_internal.hpp"
+
+namespace vkloc {
+
+using namespace track_detail;
+
+// --- edge detection --------------------------------------------------------------------------
+
+Status validateEdgeDetectorOptions(const EdgeDetectorOptions& o) {
+  if (!finiteIn(o.contrast_percentile, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge detector: contrast_percentile must be in 0..1");
+  }
+  if (!finiteIn(o.high_factor, 1e-6, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge detector: high_factor must be in 1e-6..1e6");
+  }
+  if (!finiteIn(o.low_ratio, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge detector: low_ratio must be in 0..1");
+  }
+  if (!finiteIn(o.min_high_gradient, 0.0, 1e9)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge detector: min_high_gradient must be >= 0 and finite");
+  }
+  return Status::success();
+}
+
+Result<ImageU8> detectEdges(const ImageF32& gray, const EdgeDetectorOptions& options) {
+  EdgeGradients scratch;
+  ImageU8 edges;
+  VKLOC_TRY_STATUS(detectEdgesImpl(gray, options, scratch, edges));
+  return edges;
+}
+
+namespace track_detail {
+
+/// detectEdges into `edges`, leaving the gradients in `g`.
+Status detectEdgesImpl(const ImageF32& gray, const EdgeDetectorOptions& options, EdgeGradients& g, ImageU8& edges) {
+  VKLOC_TRY_STATUS(validateEdgeDetectorOptions(options));
+  if (gray.empty() || gray.channels != 1 || gray.data.size() != static_cast<size_t>(gray.width) * gray.height) {
+    return makeError(ErrorCode::kInvalidArgument, "detectEdges: expected a non-empty single-channel image");
+  }
+  const int w = gray.width;
+  const int h = gray.height;
+  const cv::Mat src = wrap(gray);
+  cv::Mat& gx = g.gx;
+  cv::Mat& gy = g.gy;
+  cv::Mat& mag = g.mag;
+  cv::Sobel(src, gx, CV_32F, 1, 0, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
+  cv::Sobel(src, gy, CV_32F, 0, 1, 3, 1.0 / 8.0, 0, cv::BORDER_REPLICATE);
+  cv::magnitude(gx, gy, mag);
+
+  // Contrast: quantile of the magnitude over a 2x2-strided sample of the pixels.
+  std::vector<float>& sample = g.sample;
+  sample.clear();
+  sample.reserve(static_cast<size_t>((w + 1) / 2) * ((h + 1) / 2));
+  for (int y = 0; y < h; y += 2) {
+    const float* row = mag.ptr<float>(y);
+    for (int x = 0; x < w; x += 2) sample.push_back(row[x]);
+  }
+  const size_t k = std::min(sample.size() - 1, static_cast<size_t>(options.contrast_percentile * (sample.size() - 1)));
+  std::nth_element(sample.begin(), sample.begin() + static_cast<std::ptrdiff_t>(k), sample.end());
+  const double contrast = sample[k];
+  const float high = static_cast<float>(std::max(options.high_factor * contrast, options.min_high_gradient));
+  const float low = static_cast<float>(options.low_ratio * high);
+
+  // Non-maximum suppression: 0 = suppressed, 1 = weak candidate, 2 = strong.
+  std::vector<uint8_t>& state = g.state;
+  state.assign(static_cast<size_t>(w) * h, 0);
+  std::vector<int>& strong = g.strong;
+  strong.clear();
+  const float tan22 = 0.41421356f;  // tan(22.5 deg)
+  for (int y = 1; y < h - 1; ++y) {
+    const float* m0 = mag.ptr<float>(y - 1);
+    const float* m1 = mag.ptr<float>(y);
+    const float* m2 = mag.ptr<float>(y + 1);
+    const float* dx = gx.ptr<float>(y);
+    const float* dy = gy.ptr<float>(y);
+    for (int x = 1; x < w - 1; ++x) {
+      const float m = m1[x];
+      if (m < low || m <= 0.0f) continue;
+      const float ax = std::abs(dx[x]);
+      const float ay = std::abs(dy[x]);
+      float a = 0, b = 0;
+      if (ay <= tan22 * ax) {
+        a = m1[x - 1];
+        b = m1[x + 1];
+      } else if (ax <= tan22 * ay) {
+        a = m0[x];
+        b = m2[x];
+      } else if ((dx[x] > 0) == (dy[x] > 0)) {
+        a = m0[x - 1];
+        b = m2[x + 1];
+      } else {
+        a = m0[x + 1];
+        b = m2[x - 1];
+      }
+      if (m >= a && m >= b && (m > a || m > b)) {
+        const int i = y * w + x;
+        state[static_cast<size_t>(i)] = m >= high ? 2 : 1;
+        if (m >= high) strong.push_back(i);
+      }
+    }
+  }
+
+  // Hysteresis: grow from strong pixels through 8-connected weak ones.
+  resetImage<uint8_t>(edges, w, h, 1, 0);
+  std::vector<int>& stack = g.stack;
+  stack.clear();
+  for (const int i : strong) {
+    if (edges.data[i] != 0) continue;  // reached from an earlier strong pixel
+    edges.data[i] = 255;
+    stack.push_back(i);
+    while (!stack.empty()) {
+      const int p = stack.back();
+      stack.pop_back();
+      const int px = p % w;
+      const int py = p / w;
+      for (int dy2 = -1; dy2 <= 1; ++dy2) {
+        for (int dx2 = -1; dx2 <= 1; ++dx2) {
+          const int qx = px + dx2;
+          const int qy = py + dy2;
+          if (qx < 0 || qy < 0 || qx >= w || qy >= h) continue;
+          const int q = qy * w + qx;
+          if (state[q] == 0 || edges.data[q] != 0) continue;
+          edges.data[q] = 255;
+          stack.push_back(q);
+        }
+      }
+    }
+  }
+  return Status::success();
+}
+
+}  // namespace track_detail
+
+}  // namespace vkloc

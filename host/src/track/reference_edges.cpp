@@ -1,0 +1,526 @@
+// Reference edge points of a rendered view on the CPU: edge flags, back-projection, budget.
+#include "vkloc/track/reference_edges.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <opencv2/imgproc.hpp>
+
+#include "track/edges_internal.hpp"
+
+namespace vkloc {
+
+using namespace track_detail;
+
+namespace {
+
+/// A geometric edge flag and the 4-neighbour it points to (pixels).
+struct EdgeDirection {
+  uint8_t flag;
+  int dx, dy;
+};
+constexpr EdgeDirection kOcclusionDirections[4] = {{kEdgePixelOcclusionRight, 1, 0},
+                                                   {kEdgePixelOcclusionLeft, -1, 0},
+                                                   {kEdgePixelOcclusionDown, 0, 1},
+                                                   {kEdgePixelOcclusionUp, 0, -1}};
+constexpr EdgeDirection kCreaseDirections[2] = {{kEdgePixelCreaseRight, 1, 0}, {kEdgePixelCreaseDown, 0, 1}};
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// True when two depths (metres, > 0) are on the same surface: no discontinuity.
+bool continuous(float a, float b, double ratio) {
+  return std::abs(static_cast<double>(a) - b) <= ratio * std::min(a, b);
+}
+
+}  // namespace
+
+// --- reference edges ----------------------------------------------------------------------------
+
+Status validateReferenceEdgeOptions(const ReferenceEdgeOptions& o) {
+  VKLOC_TRY_STATUS(validateEdgeDetectorOptions(o.detector));
+  if (!finiteIn(o.depth_jump_ratio, 1e-6, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: depth_jump_ratio must be in 1e-6..1e6");
+  }
+  if (!finiteIn(o.crease_angle_deg, 0.0, 180.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: crease_angle_deg must be in 0..180");
+  }
+  if (o.hole_gap_px < 0 || o.hole_gap_px > 4096) {
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: hole_gap_px must be in 0..4096");
+  }
+  if (o.cell_px < 1 || o.cell_px > 4096) {
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: cell_px must be in 1..4096");
+  }
+  if (o.max_points_per_cell < 1) {
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: max_points_per_cell must be >= 1");
+  }
+  if (o.max_points < 1) return makeError(ErrorCode::kInvalidArgument, "reference edges: max_points must be >= 1");
+  if (o.levels < 1 || o.levels > 8)
+    return makeError(ErrorCode::kInvalidArgument, "reference edges: levels must be in 1..8");
+  return Status::success();
+}
+
+namespace {
+
+/// The reference view at one pyramid level: gray (0..255), depth (m), normals (3 channels).
+struct ReferenceLevel {
+  ImageF32 gray;
+  ImageF32 depth;
+  ImageF32 normals;
+};
+
+/// Halves a reference level: gray as the live pyramid (downsampleHalf), depth and normals of
+/// the nearest surface among the 2x2 input pixels an output pixel covers.
+ReferenceLevel downsampleReference(const ReferenceLevel& in) {
+  ReferenceLevel out;
+  out.gray = downsampleHalf(in.gray);
+  const int w = out.gray.width;
+  const int h = out.gray.height;
+  out.depth = ImageF32(w, h, 1, 0.0f);
+  const bool normals = in.normals.channels == 3 && in.normals.width == in.depth.width;
+  if (normals) out.normals = ImageF32(w, h, 3, 0.0f);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      float best = 0;
+      int bx = -1, by = -1;
+      for (int dy = 0; dy < 2; ++dy) {
+        for (int dx = 0; dx < 2; ++dx) {
+          const int sx = std::min(2 * x + dx, in.depth.width - 1);
+          const int sy = std::min(2 * y + dy, in.depth.height - 1);
+          const float z = in.depth.at(sx, sy);
+          if (z > 0 && std::isfinite(z) && (best == 0 || z < best)) {
+            best = z;
+            bx = sx;
+            by = sy;
+          }
+        }
+      }
+      out.depth.at(x, y) = best;
+      if (normals && bx >= 0) {
+        for (int c = 0; c < 3; ++c) out.normals.at(x, y, c) = in.normals.at(bx, by, c);
+      }
+    }
+  }
+  return out;
+}
+
+/// True when the surface of the near pixel (x, y) continues within `gap` pixels beyond its
+/// depth jump in direction (sx, sy): some pixel x + k sx, 2 <= k <= gap, has the depth that the
+/// near surface's inverse depth, extrapolated linearly along the line, predicts there (within
+/// `ratio`). Inverse depth of a plane is linear in the image, so a hole in a wall is found.
+bool nearSurfaceResumes(const ImageF32& D, int x, int y, int sx, int sy, int gap, double ratio) {
+  const float zp = D.at(x, y);
+  const double izp = 1.0 / zp;
+  double diz = 0;
+  const int bx = x - sx;
+  const int by = y - sy;
+  if (bx >= 0 && by >= 0 && bx < D.width && by < D.height) {
+    const float zb = D.at(bx, by);
+    if (zb > 0 && std::isfinite(zb) && continuous(zp, zb, ratio)) diz = izp - 1.0 / zb;
+  }
+  for (int k = 2; k <= gap; ++k) {
+    const int qx = x + k * sx;
+    const int qy = y + k * sy;
+    if (qx < 0 || qy < 0 || qx >= D.width || qy >= D.height) return false;
+    const double iz = izp + k * diz;
+    if (!(iz > 0)) return false;
+    const float zq = D.at(qx, qy);
+    if (zq > 0 && std::isfinite(zq) && continuous(static_cast<float>(1.0 / iz), zq, ratio)) return true;
+  }
+  return false;
+}
+
+/// Geometric edge flags of a reference level (occlusion and crease flags; hole rims dropped and
+/// marked in hole_rim) and its texture edges; stage 1 merges them (mergeReferenceEdges). The two
+/// are independent, so buildEdgeReference runs them side by side.
+struct GeometricFlags {
+  ImageU8 flags;
+  ImageU8 hole_rim;  ///< 1 on both sides of a dropped hole-rim flag; empty when not searched.
+};
+struct TextureEdges {
+  EdgeGradients gradients;
+  ImageU8 edges;
+  Status status = Status::success();
+};
+
+GeometricFlags geometricReferenceFlags(const ReferenceLevel& view, const ReferenceEdgeOptions& options) {
+  const int w = view.depth.width;
+  const int h = view.depth.height;
+  const bool have_normals =
+      !view.normals.empty() && view.normals.width == w && view.normals.height == h && view.normals.channels == 3;
+  ImageU8 flags(w, h, 1, 0);
+  const double ratio = options.depth_jump_ratio;
+  const float cos_crease = static_cast<float>(std::cos(options.crease_angle_deg * kPi / 180.0));
+  const ImageF32& D = view.depth;
+  const bool creases = options.crease_edges && have_normals;
+  // One pair of 4-neighbours p, q (q right of or below p), row pointers given.
+  auto pair = [&](float zp, float zq, const float* np, const float* nq, uint8_t& fp, uint8_t& fq, uint8_t to_q,
+                  uint8_t to_p, uint8_t crease) {
+    const bool sp = zp > 0 && std::isfinite(zp);
+    const bool sq = zq > 0 && std::isfinite(zq);
+    if (!sp && !sq) return;
+    if (sp != sq || !continuous(zp, zq, ratio)) {
+      if (options.occlusion_edges) {
+        // Background counts as infinitely far: the flag goes on the surface pixel.
+        if (sp && (!sq || zp < zq)) {
+          fp |= to_q;
+        } else {
+          fq |= to_p;
+        }
+      }
+      return;
+    }
+    if (creases && np[0] * nq[0] + np[1] * nq[1] + np[2] * nq[2] < cos_crease) fp |= crease;
+  };
+  for (int y = 0; y < h; ++y) {
+    const float* z = &D.data[static_cast<size_t>(y) * w];
+    const float* z_below = y + 1 < h ? z + w : nullptr;
+    const float* n = have_normals ? &view.normals.data[static_cast<size_t>(y) * w * 3] : nullptr;
+    const float* n_below = have_normals && z_below ? n + static_cast<size_t>(w) * 3 : nullptr;
+    uint8_t* f = &flags.data[static_cast<size_t>(y) * w];
+    uint8_t* f_below = z_below ? f + w : nullptr;
+    for (int x = 0; x < w; ++x) {
+      const float* np = n ? n + 3 * x : nullptr;
+      if (x + 1 < w) {
+        pair(z[x], z[x + 1], np, np ? np + 3 : nullptr, f[x], f[x + 1], kEdgePixelOcclusionRight,
+             kEdgePixelOcclusionLeft, kEdgePixelCreaseRight);
+      }
+      if (z_below) {
+        pair(z[x], z_below[x], np, n_below ? n_below + 3 * x : nullptr, f[x], f_below[x], kEdgePixelOcclusionDown,
+             kEdgePixelOcclusionUp, kEdgePixelCreaseDown);
+      }
+    }
+  }
+  // Rims of model holes: drop their occlusion flags and remember them for the texture edges.
+  ImageU8 hole_rim;
+  if (options.occlusion_edges && options.hole_gap_px > 0) {
+    hole_rim = ImageU8(w, h, 1, 0);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        uint8_t& f = flags.at(x, y);
+        for (const EdgeDirection& side : kOcclusionDirections) {
+          if (!(f & side.flag)) continue;
+          if (!nearSurfaceResumes(D, x, y, side.dx, side.dy, options.hole_gap_px, ratio)) continue;
+          f &= static_cast<uint8_t>(~side.flag);
+          hole_rim.at(x, y) = 1;
+          const int qx = x + side.dx;
+          const int qy = y + side.dy;
+          if (qx >= 0 && qy >= 0 && qx < w && qy < h) hole_rim.at(qx, qy) = 1;
+        }
+      }
+    }
+  }
+  return GeometricFlags{std::move(flags), std::move(hole_rim)};
+}
+
+void textureReferenceEdges(const ReferenceLevel& view, const ReferenceEdgeOptions& options, TextureEdges& out) {
+  out.status = detectEdgesImpl(view.gray, options.detector, out.gradients, out.edges);
+}
+
+/// Stage 1 (detectReferenceEdges) from its two halves; when texture_offsets is given it
+/// receives, per texture edge pixel, the sub-pixel offset (du, dv) of the edge from the pixel
+/// centre (2 channels, pixels). `texture` is null without texture edges.
+ImageU8 mergeReferenceEdges(const ReferenceLevel& view, GeometricFlags geometric_flags, const TextureEdges* texture,
+                            ImageF32* texture_offsets) {
+  ImageU8 flags = std::move(geometric_flags.flags);
+  if (texture == nullptr) return flags;
+  const ImageU8& hole_rim = geometric_flags.hole_rim;
+  const int w = view.depth.width;
+  const int h = view.depth.height;
+  const ImageF32& D = view.depth;
+  auto nearHoleRim = [&](int x, int y) {
+    if (hole_rim.empty()) return false;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = x + dx;
+        const int ny = y + dy;
+        if (nx >= 0 && ny >= 0 && nx < w && ny < h && hole_rim.at(nx, ny)) return true;
+      }
+    }
+    return false;
+  };
+  const ImageU8* edges = &texture->edges;
+  if (texture_offsets) *texture_offsets = ImageF32(w, h, 2, 0.0f);
+  // A geometric edge that shows in the gray image is represented by its texture edge pixels
+  // (found by the same detector as the live image's edges, so both place it alike); the
+  // geometric flags next to such pixels are dropped.
+  ImageU8 geometric = flags;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      if (!edges->at(x, y)) continue;
+      bool has_surface = D.at(x, y) > 0;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = x + dx;
+          const int ny = y + dy;
+          if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+          has_surface = has_surface || geometric.at(nx, ny) != 0;
+          flags.at(nx, ny) &= kEdgePixelTexture;
+        }
+      }
+      if (has_surface && !nearHoleRim(x, y)) {
+        flags.at(x, y) |= kEdgePixelTexture;
+        if (texture_offsets) {
+          subpixelOffset(texture->gradients, x, y, texture_offsets->at(x, y, 0), texture_offsets->at(x, y, 1));
+        }
+      }
+    }
+  }
+  return flags;
+}
+
+Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const ReferenceEdgeOptions& options,
+                                         ImageF32* texture_offsets = nullptr) {
+  GeometricFlags geometric = geometricReferenceFlags(view, options);
+  if (!options.texture_edges) return mergeReferenceEdges(view, std::move(geometric), nullptr, texture_offsets);
+  TextureEdges texture;
+  textureReferenceEdges(view, options, texture);
+  VKLOC_TRY_STATUS(texture.status);
+  return mergeReferenceEdges(view, std::move(geometric), &texture, texture_offsets);
+}
+
+}  // namespace
+
+Result<ImageU8> detectReferenceEdges(const RenderOutput& view, const ReferenceEdgeOptions& options) {
+  VKLOC_TRY_STATUS(validateReferenceEdgeOptions(options));
+  if (view.depth.empty() || view.depth.channels != 1 || view.gray.width != view.depth.width ||
+      view.gray.height != view.depth.height || view.gray.channels != 1 || view.gray.empty()) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "detectReferenceEdges: view needs a gray image and a depth image of the same size");
+  }
+  return detectReferenceEdgesImpl(ReferenceLevel{toFloat(view.gray), view.depth, view.normals}, options);
+}
+
+namespace {
+
+/// Stage 2 (backProjectEdges); texture edge points are moved by texture_offsets when given.
+std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32& depth, const PinholeCamera& camera,
+                                            const ReferenceEdgeOptions& options, const ImageF32* texture_offsets) {
+  std::vector<EdgePoint> points;
+  const int w = flags.width;
+  const int h = flags.height;
+  if (depth.width != w || depth.height != h || depth.channels != 1 || flags.channels != 1) return points;
+  const double ratio = options.depth_jump_ratio;
+  auto depthAt = [&](int x, int y) -> float {
+    if (x < 0 || y < 0 || x >= w || y >= h) return 0.0f;
+    const float z = depth.at(x, y);
+    return std::isfinite(z) && z > 0 ? z : 0.0f;
+  };
+  int px = 0, py = 0;  // pixel whose flags are emitted
+  auto nearBackground = [&]() {
+    for (int dy = -2; dy <= 2; ++dy) {
+      for (int dx = -2; dx <= 2; ++dx) {
+        const int nx = px + dx;
+        const int ny = py + dy;
+        if (nx >= 0 && ny >= 0 && nx < w && ny < h && depthAt(nx, ny) <= 0) return true;
+      }
+    }
+    return false;
+  };
+  auto emit = [&](double u, double v, double z, uint32_t kind) {
+    // Eq. 3: P = pi^-1(u, Z) with metric depth Z (camera z).
+    if (nearBackground()) kind |= kEdgeBackground;
+    EdgePoint p;
+    p.x = static_cast<float>(z * (u - camera.cx) / camera.fx);
+    p.y = static_cast<float>(z * (v - camera.cy) / camera.fy);
+    p.z = static_cast<float>(z);
+    p.kind = kind;
+    points.push_back(p);
+  };
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const uint8_t f = flags.at(x, y);
+      if (!f) continue;
+      px = x;
+      py = y;
+      const float zp = depthAt(x, y);
+      if (f & kEdgePixelTexture) {
+        // On or next to a depth jump the edge belongs to the near surface: take the smallest
+        // depth of the pixel and its 8-neighbours that are on the near side of a jump.
+        float z = zp;
+        for (int dy = -1; dy <= 1; ++dy) {
+          for (int dx = -1; dx <= 1; ++dx) {
+            const float zn = depthAt(x + dx, y + dy);
+            if (zn <= 0 || (zp > 0 && continuous(zp, zn, ratio))) continue;
+            if (zp > 0 && zn > zp) continue;
+            if (z <= 0 || zn < z) z = zn;
+          }
+        }
+        if (z > 0) {
+          const bool offset = texture_offsets && texture_offsets->width == w && texture_offsets->height == h;
+          emit(x + (offset ? texture_offsets->at(x, y, 0) : 0.0), y + (offset ? texture_offsets->at(x, y, 1) : 0.0), z,
+               kEdgeTexture);
+        }
+      }
+      if (zp <= 0) continue;
+      for (const EdgeDirection& d : kOcclusionDirections) {
+        if (!(f & d.flag)) continue;
+        // Near surface extrapolated half a pixel towards the jump when the pixel behind is
+        // on the same surface.
+        const float zb = depthAt(x - d.dx, y - d.dy);
+        double z = zp;
+        if (zb > 0 && continuous(zp, zb, ratio)) z = zp + 0.5 * (static_cast<double>(zp) - zb);
+        if (!(z > 0)) z = zp;
+        emit(x + 0.5 * d.dx, y + 0.5 * d.dy, z, kEdgeOcclusion);
+      }
+      for (const EdgeDirection& d : kCreaseDirections) {
+        if (!(f & d.flag)) continue;
+        const float zq = depthAt(x + d.dx, y + d.dy);
+        if (zq <= 0) continue;
+        emit(x + 0.5 * d.dx, y + 0.5 * d.dy, 0.5 * (static_cast<double>(zp) + zq), kEdgeCrease);
+      }
+    }
+  }
+  return points;
+}
+
+}  // namespace
+
+std::vector<EdgePoint> backProjectEdges(const ImageU8& flags, const ImageF32& depth, const PinholeCamera& camera,
+                                        const ReferenceEdgeOptions& options) {
+  return backProjectEdgesImpl(flags, depth, camera, options, nullptr);
+}
+
+std::vector<EdgePoint> subsampleEdgePoints(const std::vector<EdgePoint>& points, const PinholeCamera& camera,
+                                           const ReferenceEdgeOptions& options) {
+  const int cell = std::max(options.cell_px, 1);
+  const int cells_x = std::max(1, (camera.width + cell - 1) / cell);
+  const int cells_y = std::max(1, (camera.height + cell - 1) / cell);
+  const size_t budget = static_cast<size_t>(std::max(options.max_points, 1));
+  if (points.size() <= budget && options.max_points_per_cell >= static_cast<int>(points.size())) return points;
+  // Bucket the point indices by cell, keeping input order inside a cell.
+  std::vector<std::vector<uint32_t>> buckets(static_cast<size_t>(cells_x) * cells_y);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const EdgePoint& p = points[i];
+    if (!(p.z > 0)) continue;
+    const double u = camera.fx * p.x / p.z + camera.cx;
+    const double v = camera.fy * p.y / p.z + camera.cy;
+    const int cx = std::clamp(static_cast<int>(std::floor((u + 0.5) / cell)), 0, cells_x - 1);
+    const int cy = std::clamp(static_cast<int>(std::floor((v + 0.5) / cell)), 0, cells_y - 1);
+    buckets[static_cast<size_t>(cy) * cells_x + cx].push_back(static_cast<uint32_t>(i));
+  }
+  auto totalFor = [&](size_t k) {
+    size_t total = 0;
+    for (const auto& b : buckets) total += std::min(b.size(), k);
+    return total;
+  };
+  size_t k = static_cast<size_t>(std::max(options.max_points_per_cell, 1));
+  while (k > 1 && totalFor(k) > budget) --k;
+  std::vector<uint8_t> keep(points.size(), 0);
+  for (const auto& b : buckets) {
+    const size_t n = b.size();
+    const size_t take = std::min(n, k);
+    for (size_t j = 0; j < take; ++j) keep[b[(j * n + n / 2) / take]] = 1;
+  }
+  std::vector<EdgePoint> out;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (keep[i]) out.push_back(points[i]);
+  }
+  if (out.size() > budget) {
+    // Even one point per cell is too many: keep evenly spaced points of the list.
+    std::vector<EdgePoint> thinned;
+    thinned.reserve(budget);
+    for (size_t j = 0; j < budget; ++j) thinned.push_back(out[(j * out.size() + out.size() / 2) / budget]);
+    out = std::move(thinned);
+  }
+  return out;
+}
+
+namespace {
+
+Status validateReferenceView(const RenderOutput& view, const PinholeCamera& camera, const Pose& T_world_ref,
+                             const ReferenceEdgeOptions& options) {
+  VKLOC_TRY_STATUS(validateCamera(camera));
+  if (!isValidPose(T_world_ref)) {
+    return makeError(ErrorCode::kInvalidArgument, "buildEdgeReference: T_world_ref is not a valid rigid transform");
+  }
+  if (view.depth.width != camera.width || view.depth.height != camera.height) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("buildEdgeReference: view is {}x{}, camera expects {}x{}", view.depth.width,
+                                 view.depth.height, camera.width, camera.height));
+  }
+  VKLOC_TRY_STATUS(validateReferenceEdgeOptions(options));
+  if (options.levels < 1 || options.levels > 8) {
+    return makeError(ErrorCode::kInvalidArgument, "buildEdgeReference: levels must be in 1..8");
+  }
+  if (view.gray.width != camera.width || view.gray.height != camera.height || view.gray.channels != 1 ||
+      view.depth.channels != 1) {
+    return makeError(ErrorCode::kInvalidArgument, "buildEdgeReference: view needs gray and depth of the camera's size");
+  }
+  return Status::success();
+}
+
+/// buildEdgeReference from its level 0 (a checked view's gray as floats, depth, normals).
+Result<EdgeReference> buildEdgeReferenceFrom(ReferenceLevel level0, const PinholeCamera& camera,
+                                             const Pose& T_world_ref, const ReferenceEdgeOptions& options) {
+  EdgeReference ref;
+  ref.camera = camera;
+  ref.T_world_ref = T_world_ref;
+  // The pyramid of render targets first, then the levels in parallel (each reads only its own).
+  std::vector<ReferenceLevel> levels;
+  levels.push_back(std::move(level0));
+  while (static_cast<int>(levels.size()) < options.levels) {
+    const ReferenceLevel& finer = levels.back();
+    if (finer.depth.width < 16 || finer.depth.height < 16) break;
+    levels.push_back(downsampleReference(finer));
+  }
+  const int n = static_cast<int>(levels.size());
+  std::vector<std::vector<EdgePoint>> points(static_cast<size_t>(n));
+  // Round 1: per level the geometric flags and the texture edges, 2n independent tasks (level 0's
+  // two halves are the largest; they run side by side). Round 2: per level the merge,
+  // back-projection and subsampling.
+  std::vector<GeometricFlags> geometric(static_cast<size_t>(n));
+  std::vector<TextureEdges> texture(static_cast<size_t>(n));
+  const int tasks = options.texture_edges ? 2 * n : n;
+  cv::parallel_for_(
+      cv::Range(0, tasks),
+      [&](const cv::Range& range) {
+        for (int t = range.start; t < range.end; ++t) {
+          const size_t k = static_cast<size_t>(t / (options.texture_edges ? 2 : 1));
+          if (options.texture_edges && t % 2 == 1) {
+            textureReferenceEdges(levels[k], options, texture[k]);
+          } else {
+            geometric[k] = geometricReferenceFlags(levels[k], options);
+          }
+        }
+      },
+      tasks);
+  for (const TextureEdges& t : texture) VKLOC_TRY_STATUS(t.status);
+  cv::parallel_for_(
+      cv::Range(0, n),
+      [&](const cv::Range& range) {
+        for (int k = range.start; k < range.end; ++k) {
+          const size_t i = static_cast<size_t>(k);
+          const ReferenceLevel& level = levels[i];
+          const PinholeCamera level_camera = pyramidCamera(camera, k);
+          ImageF32 offsets;
+          const ImageU8 flags = mergeReferenceEdges(level, std::move(geometric[i]),
+                                                    options.texture_edges ? &texture[i] : nullptr, &offsets);
+          points[i] = subsampleEdgePoints(backProjectEdgesImpl(flags, level.depth, level_camera, options, &offsets),
+                                          level_camera, options);
+        }
+      },
+      n);
+  ref.points = std::move(points[0]);
+  for (int k = 1; k < n; ++k) ref.coarse_points.push_back(std::move(points[static_cast<size_t>(k)]));
+  return ref;
+}
+
+}  // namespace
+
+Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const PinholeCamera& camera, const Pose& T_world_ref,
+                                         const ReferenceEdgeOptions& options) {
+  VKLOC_TRY_STATUS(validateReferenceView(view, camera, T_world_ref, options));
+  return buildEdgeReferenceFrom(ReferenceLevel{toFloat(view.gray), view.depth, view.normals}, camera, T_world_ref,
+                                options);
+}
+
+Result<EdgeReference> buildEdgeReference(RenderOutput&& view, const PinholeCamera& camera, const Pose& T_world_ref,
+                                         const ReferenceEdgeOptions& options) {
+  VKLOC_TRY_STATUS(validateReferenceView(view, camera, T_world_ref, options));
+  return buildEdgeReferenceFrom(ReferenceLevel{toFloat(view.gray), std::move(view.depth), std::move(view.normals)},
+                                camera, T_world_ref, options);
+}
+
+}  // namespace vkloc
