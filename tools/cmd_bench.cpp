@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "common.hpp"
@@ -146,22 +147,31 @@ void run(const BenchArgs& a) {
 struct TrackBenchArgs {
   std::string sequence;
   std::vector<std::string> backends{"auto", "cpu", "vulkan"};
+  std::vector<std::string> keyframes{"worker", "sync"};
   std::string policy = "when-needed";
   int runs = 5;
   size_t max_frames = 0;
   DeviceArgs device;
 };
 
-/// One backend's timings over every timed pass (ms) and the errors of the first timed pass.
+/// One backend and keyframe mode: timings over every timed pass (ms), keyframe ages (frames),
+/// throughput and errors over every timed pass.
 struct TrackBenchRun {
   std::string summary;
   double create_ms = 0, first_frame_ms = 0;
-  std::vector<double> total, reused, render, reference, live, align;
+  std::vector<double> total, reused, render, reference, live, align, age;
   std::vector<double> t_err_mm, r_err_deg;
-  size_t lost = 0, rerendered = 0, frames = 0;
+  double wall_s = 0;  ///< Wall time of the timed passes (localize and IMU feed; images preloaded).
+  size_t lost = 0, waited = 0, frames = 0;
 };
 
 double median(const std::vector<double>& v) { return v.empty() ? NAN : stats(v).median; }
+
+double mean(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x;
+  return v.empty() ? NAN : sum / static_cast<double>(v.size());
+}
 
 void runTrackBench(const TrackBenchArgs& a) {
   const Sequence seq = take(loadSequence(a.sequence));
@@ -181,65 +191,82 @@ void runTrackBench(const TrackBenchArgs& a) {
       "one warm-up pass, medians over all timed frames\n",
       seq.name.c_str(), n, camera.width, camera.height, model.triangleCount(), context->device().name.c_str(),
       context->device().type.c_str(), a.policy.c_str(), a.runs);
-  std::printf("%-7s %8s %8s %8s %8s %8s %8s %9s %9s %9s %6s %6s %9s %9s\n", "backend", "frame", "Hz", "render",
-              "ref.pts", "live", "align", "reused", "create", "1st frame", "lost", "rerend", "mean mm", "mean deg");
+  std::printf("%-7s %-6s %7s %7s %7s %7s %7s %7s %7s %7s %7s %6s %6s %7s %7s %6s %8s %8s\n", "backend", "keyfr.", "fps",
+              "frame", "p90", "render", "ref.pts", "live", "align", "reused", "age", "waits", "lost", "create", "1st",
+              "kf", "mean mm", "mean deg");
   std::vector<std::pair<std::string, std::string>> summaries;
   for (const std::string& backend : a.backends) {
-    LocalizerOptions options;
-    options.backend = take(parseLocalizerBackend(backend));
-    options.policy = take(parseRerenderPolicy(a.policy));
-    setSequenceInertial(seq, true, options);
-    TrackBenchRun run;
-    const auto t0 = std::chrono::steady_clock::now();
-    auto localizer = take(Localizer::create(model, camera, options, take(makeGpuAccelerator(context))));
-    run.create_ms = msSince(t0);
-    run.summary = localizer->backendSummary();
-    for (int pass = -1; pass < a.runs; ++pass) {  // pass -1: warm-up (shader JIT, caches).
-      localizer->reset(T_init);
-      size_t next_imu = 0;
-      for (size_t i = 0; i < n; ++i) {
-        const int64_t t_ns = seq.images[i].t_ns;
-        next_imu = feedSequenceImu(seq, next_imu, t_ns, *localizer);
-        const LocalizationResult r = take(localizer->localize(t_ns, images[i]));
-        if (pass < 0) {
-          if (i == 0) run.first_frame_ms = r.total_ms;
-          continue;
+    for (const std::string& mode : a.keyframes) {
+      LocalizerOptions options;
+      options.backend = take(parseLocalizerBackend(backend));
+      options.policy = take(parseRerenderPolicy(a.policy));
+      options.keyframe_threading = take(parseKeyframeThreading(mode));
+      setSequenceInertial(seq, true, options);
+      TrackBenchRun run;
+      const auto t0 = std::chrono::steady_clock::now();
+      auto localizer = take(Localizer::create(model, camera, options, take(makeGpuAccelerator(context))));
+      run.create_ms = msSince(t0);
+      run.summary = localizer->backendSummary();
+      std::set<uint64_t> keyframes;
+      for (int pass = -1; pass < a.runs; ++pass) {  // pass -1: warm-up (shader JIT, caches).
+        localizer->reset(T_init);
+        size_t next_imu = 0;
+        const auto t_pass = std::chrono::steady_clock::now();
+        for (size_t i = 0; i < n; ++i) {
+          const int64_t t_ns = seq.images[i].t_ns;
+          next_imu = feedSequenceImu(seq, next_imu, t_ns, *localizer);
+          const LocalizationResult r = take(localizer->localize(t_ns, images[i]));
+          if (pass < 0) {
+            if (i == 0) run.first_frame_ms = r.total_ms;
+            continue;
+          }
+          run.total.push_back(r.total_ms);
+          run.render.push_back(r.render_ms);
+          run.reference.push_back(r.reference_ms);
+          run.live.push_back(r.live_ms);
+          run.align.push_back(r.align_ms);
+          run.age.push_back(static_cast<double>(r.keyframe_age_frames));
+          keyframes.insert(r.keyframe_id);
+          if (!r.reference_rendered) run.reused.push_back(r.total_ms);
+          ++run.frames;
+          run.lost += r.state == TrackingState::kLost;
+          run.waited += r.reference_rendered;
+          const auto it = gt.find(t_ns);
+          if (it != gt.end() && r.state == TrackingState::kTracking) {
+            run.t_err_mm.push_back((r.T_world_camera.translation() - it->second.translation()).norm() * 1e3);
+            run.r_err_deg.push_back(logSO3(it->second.linear().transpose() * r.T_world_camera.linear()).norm() * 180.0 /
+                                    M_PI);
+          }
         }
-        run.total.push_back(r.total_ms);
-        run.render.push_back(r.render_ms);
-        run.reference.push_back(r.reference_ms);
-        run.live.push_back(r.live_ms);
-        run.align.push_back(r.align_ms);
-        if (!r.reference_rendered) run.reused.push_back(r.total_ms);
-        if (pass != 0) continue;
-        ++run.frames;
-        run.lost += r.state == TrackingState::kLost;
-        run.rerendered += r.reference_rendered;
-        const auto it = gt.find(t_ns);
-        if (it != gt.end() && r.state == TrackingState::kTracking) {
-          run.t_err_mm.push_back((r.T_world_camera.translation() - it->second.translation()).norm() * 1e3);
-          run.r_err_deg.push_back(logSO3(it->second.linear().transpose() * r.T_world_camera.linear()).norm() * 180.0 /
-                                  M_PI);
-        }
+        if (pass >= 0) run.wall_s += msSince(t_pass) * 1e-3;
+        std::fprintf(stderr, "\r%s %s: pass %d of %d", backend.c_str(), mode.c_str(), pass + 2, a.runs + 1);
       }
-      std::fprintf(stderr, "\r%s: pass %d of %d", backend.c_str(), pass + 2, a.runs + 1);
+      std::fprintf(stderr, "\n");
+      const auto t_stats = computeErrorStats(run.t_err_mm);
+      const auto r_stats = computeErrorStats(run.r_err_deg);
+      const Stats latency = stats(run.total);
+      const double passes = static_cast<double>(a.runs);
+      std::printf(
+          "%-7s %-6s %7.1f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %6.1f %6.1f %7.1f %7.1f %6.1f %8.3f "
+          "%8.4f\n",
+          backend.c_str(), mode.c_str(), run.wall_s > 0 ? static_cast<double>(run.frames) / run.wall_s : 0.0,
+          latency.median, latency.p90, median(run.render), median(run.reference), median(run.live), median(run.align),
+          median(run.reused), mean(run.age), static_cast<double>(run.waited) / passes,
+          static_cast<double>(run.lost) / passes, run.create_ms, run.first_frame_ms,
+          static_cast<double>(keyframes.size()) / passes, t_stats.mean, r_stats.mean);
+      std::fflush(stdout);
+      summaries.emplace_back(backend + " " + mode, run.summary);
     }
-    std::fprintf(stderr, "\n");
-    const double frame = median(run.total);
-    const auto t_stats = computeErrorStats(run.t_err_mm);
-    const auto r_stats = computeErrorStats(run.r_err_deg);
-    std::printf("%-7s %8.2f %8.1f %8.2f %8.2f %8.2f %8.2f %9.2f %9.1f %9.1f %6zu %6zu %9.3f %9.4f\n", backend.c_str(),
-                frame, 1000.0 / frame, median(run.render), median(run.reference), median(run.live), median(run.align),
-                median(run.reused), run.create_ms, run.first_frame_ms, run.lost, run.rerendered, t_stats.mean,
-                r_stats.mean);
-    std::fflush(stdout);
-    summaries.emplace_back(backend, run.summary);
   }
   std::printf(
-      "columns (ms): frame = whole localize(); render / ref.pts = reference render and its 3D edge points (0 when the "
-      "reference is kept); live = pyramid, edges, distance fields; align = Gauss-Newton; reused = whole frames that "
-      "kept their reference; create = Localizer::create; 1st frame = first frame of the warm-up pass (JIT)\n");
-  for (const auto& [backend, summary] : summaries) std::printf("%s: %s\n", backend.c_str(), summary.c_str());
+      "columns: fps = frames per second over the timed passes (throughput; images preloaded); frame / p90 = "
+      "latency of localize() (image in to pose out), median and 90th percentile, ms; render / ref.pts = keyframe "
+      "render and edge points made on the caller's thread (0 when none), ms; live = pyramid, edges, distance "
+      "fields; align = Gauss-Newton; reused = frames that made no keyframe; age = mean frames between a keyframe's "
+      "pose and the frame tracked with it; waits = frames per pass that waited for a keyframe; lost per pass; "
+      "create = Localizer::create, 1st = first frame of the warm-up pass (JIT), ms; kf = keyframes per pass; "
+      "errors over every timed pass\n");
+  for (const auto& [what, summary] : summaries) std::printf("%s: %s\n", what.c_str(), summary.c_str());
 }
 
 struct LiveBenchArgs {
@@ -348,6 +375,10 @@ static void addBenchVerb(CLI::App& app) {
   track->add_option("--backends", targs->backends, "Backends to compare, in one process")
       ->delimiter(',')
       ->check(CLI::IsMember({"auto", "cpu", "vulkan"}))
+      ->capture_default_str();
+  track->add_option("--keyframes", targs->keyframes, "Keyframe modes to compare: worker, sync")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"worker", "sync"}))
       ->capture_default_str();
   track->add_option("--policy", targs->policy, "Re-render policy: every-frame | when-needed")
       ->check(CLI::IsMember({"every-frame", "when-needed"}))

@@ -374,4 +374,33 @@ inline ImageU8 makeTiltedStepImage(int width, int height, const Eigen::Vector2d&
   return gray;
 }
 
+/// An RGBA checkerboard of squares x squares squares of texels x texels texels each, so that
+/// bilinear sampling keeps the square boundaries crisp.
+inline Texture makeBlockChecker(int squares, int texels, uint8_t dark, uint8_t bright) {
+  const Texture small = makeCheckerTexture(squares, {dark, dark, dark, 255}, {bright, bright, bright, 255});
+  Texture tex = small;
+  tex.width = tex.height = squares * texels;
+  tex.rgba.assign(static_cast<size_t>(tex.width) * tex.height * 4, 0);
+  for (int y = 0; y < tex.height; ++y) {
+    for (int x = 0; x < tex.width; ++x) {
+      for (int c = 0; c < 4; ++c) {
+        tex.rgba[(static_cast<size_t>(y) * tex.width + x) * 4 + c] =
+            small.rgba[(static_cast<size_t>(y / texels) * squares + x / texels) * 4 + c];
+      }
+    }
+  }
+  return tex;
+}
+
+/// A checker-textured box (0.6 x 0.45 x 0.4 m) on a checker-textured ground square (2.4 m),
+/// z up: a small scene the edge tracker converges on from a few centimetres off.
+inline Model makeBoxOnGround() {
+  Model m = makeBox({-0.3, -0.2, 0.0}, {0.3, 0.25, 0.4});
+  appendQuad(m, {-1.2, -1.2, 0.0}, {2.4, 0.0, 0.0}, {0.0, 2.4, 0.0});  // faces +z
+  finishSingleBlock(m);
+  m.textures = {makeBlockChecker(8, 8, 40, 220)};
+  m.materials = {Material{"checker", {1, 1, 1, 1}, 0}};
+  return m;
+}
+
 }  // namespace vkloc::test

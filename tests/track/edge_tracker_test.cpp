@@ -201,33 +201,7 @@ PinholeCamera smallCamera() {
 /// edges from two different viewpoints agree on; at 640x480 it is ~0.25 px.
 PinholeCamera vgaCamera() { return PinholeCamera{}; }
 
-/// An RGBA checkerboard of squares x squares squares of texels x texels texels each, so that
-/// bilinear sampling keeps the square boundaries crisp.
-Texture blockChecker(int squares, int texels, uint8_t dark, uint8_t bright) {
-  const Texture small = test::makeCheckerTexture(squares, {dark, dark, dark, 255}, {bright, bright, bright, 255});
-  Texture tex = small;
-  tex.width = tex.height = squares * texels;
-  tex.rgba.assign(static_cast<size_t>(tex.width) * tex.height * 4, 0);
-  for (int y = 0; y < tex.height; ++y) {
-    for (int x = 0; x < tex.width; ++x) {
-      for (int c = 0; c < 4; ++c) {
-        tex.rgba[(static_cast<size_t>(y) * tex.width + x) * 4 + c] =
-            small.rgba[(static_cast<size_t>(y / texels) * squares + x / texels) * 4 + c];
-      }
-    }
-  }
-  return tex;
-}
-
-/// A checker-textured box on a checker-textured ground square, about 2 m from the camera.
-Model boxOnGround() {
-  Model m = test::makeBox({-0.3, -0.2, 0.0}, {0.3, 0.25, 0.4});
-  test::appendQuad(m, {-1.2, -1.2, 0.0}, {2.4, 0.0, 0.0}, {0.0, 2.4, 0.0});  // faces +z
-  test::finishSingleBlock(m);
-  m.textures = {blockChecker(8, 8, 40, 220)};
-  m.materials = {Material{"checker", {1, 1, 1, 1}, 0}};
-  return m;
-}
+Model boxOnGround() { return test::makeBoxOnGround(); }
 
 RenderOutput render(const Model& model, const PinholeCamera& cam, const Pose& T_world_camera) {
   auto view = renderReference(model, cam, T_world_camera);
@@ -311,7 +285,7 @@ TEST(EdgeTracker, ReportsLostForFarPoseOrUnrelatedImage) {
   // Unrelated live image: a textured sphere somewhere else.
   const Model sphere = test::makeUvSphere({0.3, 0.1, 0.5}, 0.5, 24, 12);
   Model textured = sphere;
-  textured.textures = {blockChecker(6, 8, 30, 230)};
+  textured.textures = {test::makeBlockChecker(6, 8, 30, 230)};
   textured.materials = {Material{"checker", {1, 1, 1, 1}, 0}};
   const RenderOutput other = render(textured, cam, test::cameraLookingAt({-1.5, 1.0, 1.2}, {0.0, 0.0, 0.4}));
   const TrackResult unrelated = trackScene(model, cam, T_gt, T_gt, &other.gray);

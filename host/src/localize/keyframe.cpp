@@ -1,5 +1,9 @@
 #include "vkloc/localize/keyframe.hpp"
 
+#include <sched.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 
@@ -62,8 +66,8 @@ Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeReques
   return std::shared_ptr<const Keyframe>(std::move(keyframe));
 }
 
-KeyframeWorker::KeyframeWorker(std::unique_ptr<KeyframeMaker> maker)
-    : maker_(std::move(maker)), description_(maker_->describe()) {
+KeyframeWorker::KeyframeWorker(std::unique_ptr<KeyframeMaker> maker, bool background)
+    : maker_(std::move(maker)), description_(maker_->describe()), background_(background) {
   thread_ = std::thread([this] { run(); });
 }
 
@@ -78,6 +82,18 @@ KeyframeWorker::~KeyframeWorker() {
 }
 
 void KeyframeWorker::run() {
+#ifdef __linux__
+  if (background_) {
+    // Linux schedules threads one by one: SCHED_IDLE on this thread alone lets the tracking
+    // thread and the thread pool it uses run first (a wake-up of theirs preempts it at once).
+    sched_param param{};
+    if (sched_setscheduler(static_cast<pid_t>(gettid()), SCHED_IDLE, &param) == 0) {
+      background_applied_ = true;
+    } else if (setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 19) == 0) {
+      background_applied_ = true;
+    }
+  }
+#endif
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
     wake_.wait(lock, [this] { return stop_ || pending_.has_value(); });
@@ -87,16 +103,14 @@ void KeyframeWorker::run() {
     pending_.reset();
     running_ticket_ = ticket;
     lock.unlock();
-    Result<std::shared_ptr<const Keyframe>> result = maker_->make(request);
+    std::optional<Result<std::shared_ptr<const Keyframe>>> result;
+    {
+      std::lock_guard<std::mutex> maker_lock(maker_mutex_);
+      result = maker_->make(request);
+    }
     lock.lock();
     running_ticket_ = 0;
-    if (ticket == wanted_ticket_) {
-      wanted_result_ = std::move(result);
-    } else if (ticket >= discard_below_) {
-      finished_result_ = std::move(result);
-      finished_ticket_ = ticket;
-    }
-    finished_.notify_all();
+    if (ticket >= discard_below_) finished_result_ = std::move(result);
   }
 }
 
@@ -123,20 +137,9 @@ Result<std::shared_ptr<const Keyframe>> KeyframeWorker::takeFinished() {
 }
 
 Result<std::shared_ptr<const Keyframe>> KeyframeWorker::makeNow(const KeyframeRequest& request) {
-  std::unique_lock<std::mutex> lock(mutex_);
-  const uint64_t ticket = next_ticket_++;
-  discard_below_ = ticket;
-  finished_result_.reset();
-  pending_ = request;
-  pending_ticket_ = ticket;
-  wanted_ticket_ = ticket;
-  wanted_result_.reset();
-  wake_.notify_one();
-  finished_.wait(lock, [this] { return wanted_result_.has_value(); });
-  Result<std::shared_ptr<const Keyframe>> out = std::move(*wanted_result_);
-  wanted_result_.reset();
-  wanted_ticket_ = 0;
-  return out;
+  discard();
+  std::lock_guard<std::mutex> maker_lock(maker_mutex_);
+  return maker_->make(request);
 }
 
 void KeyframeWorker::discard() {

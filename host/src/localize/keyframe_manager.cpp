@@ -37,7 +37,7 @@ const char* keyframeThreadingName(KeyframeThreading threading) {
 KeyframeManager::KeyframeManager(std::unique_ptr<KeyframeMaker> maker, const KeyframeManagerOptions& options)
     : options_(options), renderer_description_(maker->describe()) {
   if (options.threading == KeyframeThreading::kWorkerThread) {
-    worker_ = std::make_unique<KeyframeWorker>(std::move(maker));
+    worker_ = std::make_unique<KeyframeWorker>(std::move(maker), options.background_worker);
   } else {
     maker_ = std::move(maker);
   }

@@ -33,6 +33,7 @@ KeyframeManagerOptions keyframeOptions(const LocalizerOptions& o) {
   k.policy = o.policy;
   k.thresholds = o.rerender;
   k.threading = o.keyframe_threading;
+  k.background_worker = o.keyframe_worker_background;
   k.adapt_edge_kinds = o.adapt_edge_kinds;
   k.kind_visibility_ratio = o.kind_visibility_ratio;
   return k;
@@ -283,8 +284,9 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
     if (!created.ok()) return created.error();
     renderer = std::move(created).value();
   }
-  auto maker =
-      std::make_unique<KeyframeMaker>(std::move(renderer), camera, impl->options.render, impl->options.reference);
+  ReferenceEdgeOptions keyframe_edges = impl->options.reference;
+  if (options.keyframe_threading == KeyframeThreading::kWorkerThread) keyframe_edges.parallel = false;
+  auto maker = std::make_unique<KeyframeMaker>(std::move(renderer), camera, impl->options.render, keyframe_edges);
   impl->keyframes = std::make_unique<KeyframeManager>(std::move(maker), keyframeOptions(options));
 
   auto cpu = CpuEdgeTrackingBackend::create(camera, impl->options.live);

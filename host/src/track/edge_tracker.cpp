@@ -141,43 +141,52 @@ std::vector<float> evaluateEdgeResiduals(const std::vector<EdgePoint>& points, c
 }
 
 double estimateTDistributionScale(const std::vector<float>& residuals, double nu, int iterations, double min_sigma_px) {
+  // The squares of the valid residuals, once, in order (the fixed-point iterations below read
+  // only them; a compact array keeps the loop free of branches).
+  thread_local std::vector<double> squares;
+  squares.clear();
   double sum = 0;
-  size_t n = 0;
   for (float r : residuals) {
     if (r < 0) continue;
-    sum += static_cast<double>(r) * r;
-    ++n;
+    const double r2 = static_cast<double>(r) * r;
+    squares.push_back(r2);
+    sum += r2;
   }
+  const size_t n = squares.size();
   const double min_var = min_sigma_px * min_sigma_px;
   if (n == 0) return min_sigma_px;
   double var = std::max(sum / n, min_var);
   for (int it = 0; it < iterations; ++it) {
     double acc = 0;
-    for (float r : residuals) {
-      if (r < 0) continue;
-      const double r2 = static_cast<double>(r) * r;
-      acc += r2 * (nu + 1.0) / (nu + r2 / var);
-    }
+    for (double r2 : squares) acc += r2 * (nu + 1.0) / (nu + r2 / var);
     var = std::max(acc / n, min_var);
   }
   return std::sqrt(var);
 }
+
+namespace {
+
+/// Adds one valid point's weighted terms to the normal equations (eq. 14).
+inline void addToNormalEquations(EdgeNormalEquations& out, double residual, const Vector6d& J, double sigma_px,
+                                 double nu) {
+  const double w = tDistributionWeight(residual, sigma_px, nu);
+  for (int r = 0; r < 6; ++r) {
+    const double wj = w * J[r];
+    for (int c = r; c < 6; ++c) out[edgeNormalIndex(r, c)] += wj * J[c];
+    out[kEdgeNormalGradientOffset + r] += wj * residual;
+  }
+  out[kEdgeNormalCostIndex] += w * residual * residual;
+  out[kEdgeNormalCountIndex] += 1.0;
+}
+
+}  // namespace
 
 EdgeNormalEquations accumulateEdgeNormalEquations(const std::vector<EdgePoint>& points, const Pose& T_camera_ref,
                                                   const LiveLevel& level, double sigma_px, double nu) {
   EdgeNormalEquations out{};
   for (const EdgePoint& point : points) {
     const EdgePointEvaluation e = evaluateEdgePoint(point, T_camera_ref, level, true);
-    if (!e.valid) continue;
-    const double w = tDistributionWeight(e.residual, sigma_px, nu);
-    const Vector6d& J = e.jacobian;
-    for (int r = 0; r < 6; ++r) {
-      const double wj = w * J[r];
-      for (int c = r; c < 6; ++c) out[edgeNormalIndex(r, c)] += wj * J[c];
-      out[kEdgeNormalGradientOffset + r] += wj * e.residual;
-    }
-    out[kEdgeNormalCostIndex] += w * e.residual * e.residual;
-    out[kEdgeNormalCountIndex] += 1.0;
+    if (e.valid) addToNormalEquations(out, e.residual, e.jacobian, sigma_px, nu);
   }
   return out;
 }
@@ -274,7 +283,35 @@ Result<EdgeEvaluation> EdgeAlignmentBackend::evaluate(int level, const Pose& T_c
 
 Status CpuEdgeAlignment::setPoints(const std::vector<EdgePoint>& points) {
   points_ = points;
+  evaluated_.valid = false;
   return Status::success();
+}
+
+Result<EdgeEvaluation> CpuEdgeAlignment::evaluate(int level, const Pose& T_camera_ref, double nu, int scale_iterations,
+                                                  double min_sigma_px) {
+  VKLOC_TRY_STATUS(checkLevel(level));
+  const LiveLevel& live = live_->levels[level];
+  const size_t n = points_.size();
+  Evaluated& c = evaluated_;
+  c.valid = false;
+  c.point_valid.assign(n, 0);
+  c.residual.resize(n);
+  c.jacobian.resize(n);
+  EdgeEvaluation out;
+  out.residuals.assign(n, kInvalidResidual);
+  for (size_t i = 0; i < n; ++i) {
+    const EdgePointEvaluation e = evaluateEdgePoint(points_[i], T_camera_ref, live, true);
+    if (!e.valid) continue;
+    c.point_valid[i] = 1;
+    c.residual[i] = e.residual;
+    c.jacobian[i] = e.jacobian;
+    out.residuals[i] = static_cast<float>(e.residual);
+  }
+  c.level = level;
+  c.T_camera_ref = T_camera_ref;
+  c.valid = true;
+  out.sigma_px = estimateTDistributionScale(out.residuals, nu, scale_iterations, min_sigma_px);
+  return out;
 }
 
 Result<std::vector<float>> CpuEdgeAlignment::residuals(int level, const Pose& T_camera_ref) {
@@ -287,6 +324,14 @@ Result<EdgeNormalEquations> CpuEdgeAlignment::accumulate(int level, const Pose& 
   VKLOC_TRY_STATUS(checkLevel(level));
   if (!(sigma_px > 0) || !(nu > 0) || !std::isfinite(sigma_px) || !std::isfinite(nu)) {
     return makeError(ErrorCode::kInvalidArgument, "CpuEdgeAlignment::accumulate: sigma_px and nu must be > 0");
+  }
+  const Evaluated& c = evaluated_;
+  if (c.valid && c.level == level && c.T_camera_ref.matrix() == T_camera_ref.matrix()) {
+    EdgeNormalEquations out{};
+    for (size_t i = 0; i < points_.size(); ++i) {
+      if (c.point_valid[i]) addToNormalEquations(out, c.residual[i], c.jacobian[i], sigma_px, nu);
+    }
+    return out;
   }
   return accumulateEdgeNormalEquations(points_, T_camera_ref, live_->levels[level], sigma_px, nu);
 }
@@ -366,6 +411,8 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
         auto first = backend.evaluate(level_index, T, options.nu, options.scale_iterations, kMinSigmaPx);
         if (!first.ok()) return first.error();
         EdgeEvaluation at_T = std::move(first).value();
+        double cost_at_T = 0;  // robust cost of at_T with its own scale, kept through rejected steps
+        bool cost_at_T_known = false;
         double lambda = 0;
         for (int it = 0; it < options.max_iterations; ++it) {
           if (!at_T.eq) {
@@ -401,11 +448,16 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
           auto evaluated = backend.evaluate(level_index, T_new, options.nu, options.scale_iterations, kMinSigmaPx);
           if (!evaluated.ok()) return evaluated.error();
           // Both costs with the scale at T (the robust cost of eq. 13 for one sigma).
-          const double cost_old = robustCost(at_T.residuals, at_T.sigma_px, options.nu, trunc);
+          if (!cost_at_T_known) {
+            cost_at_T = robustCost(at_T.residuals, at_T.sigma_px, options.nu, trunc);
+            cost_at_T_known = true;
+          }
+          const double cost_old = cost_at_T;
           const double cost_new = robustCost(evaluated->residuals, at_T.sigma_px, options.nu, trunc);
           if (cost_new <= cost_old) {
             T = T_new;
             at_T = std::move(evaluated).value();
+            cost_at_T_known = false;
             lambda = lambda > options.initial_damping ? lambda * 0.1 : 0.0;
             // Converged: a step below min_step, or a cost that no longer falls by min_cost_decrease.
             if (delta.norm() < options.min_step || cost_old - cost_new <= options.min_cost_decrease * cost_old) break;

@@ -473,35 +473,36 @@ Result<EdgeReference> buildEdgeReferenceFrom(ReferenceLevel level0, const Pinhol
   std::vector<GeometricFlags> geometric(static_cast<size_t>(n));
   std::vector<TextureEdges> texture(static_cast<size_t>(n));
   const int tasks = options.texture_edges ? 2 * n : n;
-  cv::parallel_for_(
-      cv::Range(0, tasks),
-      [&](const cv::Range& range) {
-        for (int t = range.start; t < range.end; ++t) {
-          const size_t k = static_cast<size_t>(t / (options.texture_edges ? 2 : 1));
-          if (options.texture_edges && t % 2 == 1) {
-            textureReferenceEdges(levels[k], options, texture[k]);
-          } else {
-            geometric[k] = geometricReferenceFlags(levels[k], options);
-          }
-        }
-      },
-      tasks);
+  auto forRange = [&](int count, const std::function<void(const cv::Range&)>& body) {
+    if (options.parallel) {
+      cv::parallel_for_(cv::Range(0, count), body, count);
+    } else {
+      body(cv::Range(0, count));
+    }
+  };
+  forRange(tasks, [&](const cv::Range& range) {
+    for (int t = range.start; t < range.end; ++t) {
+      const size_t k = static_cast<size_t>(t / (options.texture_edges ? 2 : 1));
+      if (options.texture_edges && t % 2 == 1) {
+        textureReferenceEdges(levels[k], options, texture[k]);
+      } else {
+        geometric[k] = geometricReferenceFlags(levels[k], options);
+      }
+    }
+  });
   for (const TextureEdges& t : texture) VKLOC_TRY_STATUS(t.status);
-  cv::parallel_for_(
-      cv::Range(0, n),
-      [&](const cv::Range& range) {
-        for (int k = range.start; k < range.end; ++k) {
-          const size_t i = static_cast<size_t>(k);
-          const ReferenceLevel& level = levels[i];
-          const PinholeCamera level_camera = pyramidCamera(camera, k);
-          ImageF32 offsets;
-          const ImageU8 flags = mergeReferenceEdges(level, std::move(geometric[i]),
-                                                    options.texture_edges ? &texture[i] : nullptr, &offsets);
-          points[i] = subsampleEdgePoints(backProjectEdgesImpl(flags, level.depth, level_camera, options, &offsets),
-                                          level_camera, options);
-        }
-      },
-      n);
+  forRange(n, [&](const cv::Range& range) {
+    for (int k = range.start; k < range.end; ++k) {
+      const size_t i = static_cast<size_t>(k);
+      const ReferenceLevel& level = levels[i];
+      const PinholeCamera level_camera = pyramidCamera(camera, k);
+      ImageF32 offsets;
+      const ImageU8 flags =
+          mergeReferenceEdges(level, std::move(geometric[i]), options.texture_edges ? &texture[i] : nullptr, &offsets);
+      points[i] = subsampleEdgePoints(backProjectEdgesImpl(flags, level.depth, level_camera, options, &offsets),
+                                      level_camera, options);
+    }
+  });
   ref.points = std::move(points[0]);
   for (int k = 1; k < n; ++k) ref.coarse_points.push_back(std::move(points[static_cast<size_t>(k)]));
   return ref;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <condition_variable>
 #include <cstdint>
 #include <memory>
@@ -64,12 +65,15 @@ class KeyframeMaker {
 
 /// A KeyframeMaker on a thread of its own. The tracking thread requests keyframes and picks up
 /// finished ones without waiting; only makeNow() waits. At most one keyframe is being made and
-/// one request waits; a new request replaces the waiting one. Thread-safety: all members may be
-/// called from any thread (typically the one tracking thread); the maker and its renderer are
-/// used by the worker thread only.
+/// one request waits; a new request replaces the waiting one. The worker thread runs at the
+/// lowest scheduling priority when asked (Linux SCHED_IDLE: it takes only CPU time the rest of
+/// the process leaves), while makeNow() makes its keyframe on the calling thread, so a caller
+/// that must wait is not slowed by that priority. Thread-safety: all members may be called from
+/// any thread (typically the one tracking thread); the maker is used by one thread at a time.
 class KeyframeWorker {
  public:
-  explicit KeyframeWorker(std::unique_ptr<KeyframeMaker> maker);
+  /// `background`: run the worker thread at the lowest priority (see above).
+  explicit KeyframeWorker(std::unique_ptr<KeyframeMaker> maker, bool background = false);
   /// Stops the thread after the keyframe in progress (a waiting request is dropped).
   ~KeyframeWorker();
   KeyframeWorker(const KeyframeWorker&) = delete;
@@ -82,30 +86,31 @@ class KeyframeWorker {
   /// The newest keyframe finished since the last call (older unclaimed ones are dropped), null
   /// when none; the error of a failed request.
   Result<std::shared_ptr<const Keyframe>> takeFinished();
-  /// Drops the waiting request and any finished keyframe not yet taken, then makes `request`
-  /// (after the keyframe in progress, which is dropped too) and waits for it.
+  /// Drops the waiting request, the keyframe in progress and unclaimed results, then makes
+  /// `request` on the calling thread (after the keyframe in progress is done with the maker).
   Result<std::shared_ptr<const Keyframe>> makeNow(const KeyframeRequest& request);
   /// Drops the waiting request and unclaimed results (reset, loss).
   void discard();
   std::string describe() const { return description_; }
+  /// True when the worker thread runs at the lowest priority (asked for, and the system allowed it).
+  bool background() const { return background_applied_; }
 
  private:
   void run();
   std::unique_ptr<KeyframeMaker> maker_;
   std::string description_;
+  std::mutex maker_mutex_;  ///< Held while the maker makes a keyframe.
   mutable std::mutex mutex_;
-  std::condition_variable wake_;      ///< The worker waits on it for requests.
-  std::condition_variable finished_;  ///< makeNow waits on it for its keyframe.
+  std::condition_variable wake_;  ///< The worker waits on it for requests.
   std::optional<KeyframeRequest> pending_;
   uint64_t pending_ticket_ = 0;  ///< Ticket of pending_.
   uint64_t next_ticket_ = 1;
   uint64_t running_ticket_ = 0;  ///< Ticket being made (0: idle).
-  uint64_t wanted_ticket_ = 0;   ///< makeNow's ticket: its result is kept for it alone.
   uint64_t discard_below_ = 0;   ///< Results of tickets below this are dropped.
   std::optional<Result<std::shared_ptr<const Keyframe>>> finished_result_;  ///< Unclaimed, for takeFinished.
-  uint64_t finished_ticket_ = 0;
-  std::optional<Result<std::shared_ptr<const Keyframe>>> wanted_result_;  ///< For makeNow.
   bool stop_ = false;
+  bool background_ = false;
+  std::atomic<bool> background_applied_{false};
   std::thread thread_;
 };
 

@@ -257,12 +257,28 @@ class CpuEdgeAlignment final : public EdgeAlignmentBackend {
   Status setPoints(const std::vector<EdgePoint>& points) override;
   Result<std::vector<float>> residuals(int level, const Pose& T_camera_ref) override;
   Result<EdgeNormalEquations> accumulate(int level, const Pose& T_camera_ref, double sigma_px, double nu) override;
+  /// Residuals and scale as the default, evaluating each point's Jacobian in the same pass; a
+  /// following accumulate() at the same level and pose sums the kept Jacobians instead of
+  /// evaluating the points again (the same numbers, in the same order).
+  Result<EdgeEvaluation> evaluate(int level, const Pose& T_camera_ref, double nu, int scale_iterations,
+                                  double min_sigma_px) override;
   Result<double> nearEdgeFraction(int level, double threshold_px) override;
 
  private:
   Status checkLevel(int level) const;
   const LiveFrame* live_;
   std::vector<EdgePoint> points_;
+  /// The points evaluated by the last evaluate(): level, pose, and per point validity, residual
+  /// and Jacobian (invalid when the points or the frame changed since).
+  struct Evaluated {
+    bool valid = false;
+    int level = -1;
+    Pose T_camera_ref = Pose::Identity();
+    std::vector<uint8_t> point_valid;
+    std::vector<double> residual;
+    std::vector<Vector6d> jacobian;
+  };
+  Evaluated evaluated_;
 };
 
 /// Aligns the reference's edge points (level k's points on live level k) with the live frame's

@@ -68,6 +68,10 @@ struct ReferenceEdgeOptions {
   int max_points_per_cell = 6;   ///< At most this many points per cell.
   int max_points = 4000;         ///< Total budget of points per level (> 0).
   int levels = 3;                ///< Pyramid levels of buildEdgeReference (1..8), as the live frame's.
+  /// Run the per-level tasks of buildEdgeReference on OpenCV's thread pool; false runs them on
+  /// the calling thread (a background keyframe worker, which must leave the pool to the
+  /// tracking thread). The points are the same either way.
+  bool parallel = true;
 };
 
 /// Checks ranges of ReferenceEdgeOptions; kInvalidArgument naming the field otherwise.

@@ -1,0 +1,230 @@
+// Tests of keyframe making and the keyframe worker thread (localize/keyframe.hpp), with the CPU
+// reference renderer behind a renderer whose calls the tests can hold, count and fail.
+#include "vkloc/localize/keyframe.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+#include "localize/localize_scene.hpp"
+
+namespace vkloc {
+namespace {
+
+using namespace std::chrono_literals;
+
+/// A Renderer over CpuRenderer whose renders wait while `held`, count themselves and fail on
+/// request. Thread-safe for the tests' purpose.
+class GatedRenderer final : public Renderer {
+ public:
+  struct Control {
+    std::mutex mutex;
+    std::condition_variable changed;
+    bool held = false;
+    int started = 0;
+    int finished = 0;
+    bool fail = false;
+    void hold(bool h) {
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        held = h;
+      }
+      changed.notify_all();
+    }
+    /// Waits until `n` renders have started (or 5 s).
+    bool waitStarted(int n) {
+      std::unique_lock<std::mutex> lock(mutex);
+      return changed.wait_for(lock, 5s, [&] { return started >= n; });
+    }
+  };
+  explicit GatedRenderer(std::shared_ptr<Control> control)
+      : control_(std::move(control)), inner_(std::move(CpuRenderer::create(test::makeBoxOnGround())).value()) {}
+  Result<RenderOutput> render(const PinholeCamera& camera, const Pose& T_world_camera,
+                              const RenderSettings& settings) override {
+    {
+      std::unique_lock<std::mutex> lock(control_->mutex);
+      ++control_->started;
+      control_->changed.notify_all();
+      control_->changed.wait(lock, [&] { return !control_->held; });
+      if (control_->fail) {
+        ++control_->finished;
+        return makeError(ErrorCode::kGpuError, "gated renderer: failing on purpose");
+      }
+    }
+    Result<RenderOutput> out = inner_->render(camera, T_world_camera, settings);
+    std::lock_guard<std::mutex> lock(control_->mutex);
+    ++control_->finished;
+    control_->changed.notify_all();
+    return out;
+  }
+  std::string describe() const override { return "gated CPU renderer"; }
+
+ private:
+  std::shared_ptr<Control> control_;
+  std::unique_ptr<CpuRenderer> inner_;
+};
+
+std::unique_ptr<KeyframeMaker> gatedMaker(const std::shared_ptr<GatedRenderer::Control>& control) {
+  ReferenceEdgeOptions reference;
+  reference.levels = 2;
+  return std::make_unique<KeyframeMaker>(std::make_unique<GatedRenderer>(control), test::localizeCamera(),
+                                         RenderSettings{}, reference);
+}
+
+KeyframeRequest requestAt(int frame) {
+  KeyframeRequest r;
+  r.T_world_ref = test::localizeTruth(frame);
+  r.frame_index = frame;
+  r.t_ns = int64_t{frame} * 50'000'000;
+  return r;
+}
+
+/// Polls takeFinished() until a keyframe comes (or 10 s).
+std::shared_ptr<const Keyframe> waitFinished(KeyframeWorker& worker) {
+  for (int i = 0; i < 1000; ++i) {
+    Result<std::shared_ptr<const Keyframe>> r = worker.takeFinished();
+    EXPECT_TRUE(r.ok());
+    if (r.ok() && *r) return *r;
+    std::this_thread::sleep_for(10ms);
+  }
+  return nullptr;
+}
+
+TEST(KeyframeMaker, MakesEdgePointsAndLeavesOutDroppedKinds) {
+  auto control = std::make_shared<GatedRenderer::Control>();
+  auto maker = gatedMaker(control);
+  EXPECT_EQ(maker->describe(), "gated CPU renderer");
+  auto all = maker->make(requestAt(0));
+  ASSERT_TRUE(all.ok()) << all.error().message;
+  const Keyframe& k = **all;
+  EXPECT_EQ(k.id, 1u);
+  EXPECT_GT(k.reference.points.size(), 200u);
+  ASSERT_EQ(k.reference.coarse_points.size(), 1u);
+  EXPECT_GT(k.scene_depth_m, 1.5);
+  EXPECT_LT(k.scene_depth_m, 3.5);
+  EXPECT_GT(k.render_ms, 0.0);
+  EXPECT_TRUE(k.reference.T_world_ref.isApprox(test::localizeTruth(0)));
+  auto count = [](const std::vector<EdgePoint>& points, uint32_t kind) {
+    size_t n = 0;
+    for (const EdgePoint& p : points) n += (p.kind & ~kEdgeBackground) == kind;
+    return n;
+  };
+  EXPECT_GT(count(k.reference.points, kEdgeOcclusion) + count(k.reference.points, kEdgeCrease), 0u);
+  KeyframeRequest drop = requestAt(0);
+  drop.dropped_kinds = {true, true, true};
+  auto textured = maker->make(drop);
+  ASSERT_TRUE(textured.ok());
+  EXPECT_EQ((*textured)->id, 2u);
+  for (const EdgePoint& p : (*textured)->reference.points) EXPECT_EQ(p.kind, kEdgeTexture);
+  for (const EdgePoint& p : (*textured)->reference.coarse_points[0]) EXPECT_EQ(p.kind, kEdgeTexture);
+  control->fail = true;
+  auto failed = maker->make(requestAt(0));
+  ASSERT_FALSE(failed.ok());
+  EXPECT_EQ(failed.error().code, ErrorCode::kGpuError);
+}
+
+TEST(KeyframeWorker, MakesRequestsBesideTheCaller) {
+  auto control = std::make_shared<GatedRenderer::Control>();
+  KeyframeWorker worker(gatedMaker(control), true);
+  EXPECT_FALSE(worker.busy());
+  EXPECT_FALSE(*worker.takeFinished());
+  worker.request(requestAt(3));
+  const auto k = waitFinished(worker);
+  ASSERT_TRUE(k);
+  EXPECT_EQ(k->request.frame_index, 3);
+  EXPECT_FALSE(worker.busy());
+  // Taken once only.
+  EXPECT_FALSE(*worker.takeFinished());
+}
+
+TEST(KeyframeWorker, ANewRequestReplacesTheWaitingOne) {
+  auto control = std::make_shared<GatedRenderer::Control>();
+  KeyframeWorker worker(gatedMaker(control));
+  control->hold(true);
+  worker.request(requestAt(1));
+  ASSERT_TRUE(control->waitStarted(1));  // request 1 is being made (held in the render)
+  EXPECT_TRUE(worker.busy());
+  worker.request(requestAt(2));  // waits
+  worker.request(requestAt(3));  // replaces 2
+  control->hold(false);
+  // 1 finishes, then 3 is made; 2 never is. The newest finished one is handed out.
+  std::shared_ptr<const Keyframe> last;
+  for (int i = 0; i < 1000 && (!last || last->request.frame_index != 3); ++i) {
+    auto r = worker.takeFinished();
+    ASSERT_TRUE(r.ok());
+    if (*r) last = *r;
+    std::this_thread::sleep_for(5ms);
+  }
+  ASSERT_TRUE(last);
+  EXPECT_EQ(last->request.frame_index, 3);
+  std::lock_guard<std::mutex> lock(control->mutex);
+  EXPECT_EQ(control->started, 2);
+}
+
+TEST(KeyframeWorker, MakeNowDropsOlderWorkAndRunsOnTheCaller) {
+  auto control = std::make_shared<GatedRenderer::Control>();
+  KeyframeWorker worker(gatedMaker(control), true);
+  control->hold(true);
+  worker.request(requestAt(1));
+  ASSERT_TRUE(control->waitStarted(1));
+  worker.request(requestAt(2));
+  std::thread release([&] {
+    std::this_thread::sleep_for(50ms);
+    control->hold(false);
+  });
+  // Waits for request 1 to let go of the maker, then makes 9 here; 1 and 2 are dropped.
+  auto now = worker.makeNow(requestAt(9));
+  release.join();
+  ASSERT_TRUE(now.ok()) << now.error().message;
+  EXPECT_EQ((*now)->request.frame_index, 9);
+  std::this_thread::sleep_for(50ms);
+  EXPECT_FALSE(*worker.takeFinished());
+  EXPECT_FALSE(worker.busy());
+  std::lock_guard<std::mutex> lock(control->mutex);
+  EXPECT_EQ(control->started, 2);  // 1 and 9
+}
+
+TEST(KeyframeWorker, ErrorsReachTheCallerAndDiscardDropsResults) {
+  auto control = std::make_shared<GatedRenderer::Control>();
+  KeyframeWorker worker(gatedMaker(control));
+  control->fail = true;
+  worker.request(requestAt(1));
+  Result<std::shared_ptr<const Keyframe>> r = std::shared_ptr<const Keyframe>();
+  for (int i = 0; i < 1000; ++i) {
+    r = worker.takeFinished();
+    if (!r.ok() || *r) break;
+    std::this_thread::sleep_for(5ms);
+  }
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().message.find("failing on purpose"), std::string::npos);
+  control->fail = false;
+  worker.request(requestAt(2));
+  ASSERT_TRUE(control->waitStarted(2));
+  while (worker.busy()) std::this_thread::sleep_for(5ms);
+  worker.discard();
+  EXPECT_FALSE(*worker.takeFinished());
+}
+
+TEST(KeyframeWorker, StopsWithARequestPendingAndOneRunning) {
+  auto control = std::make_shared<GatedRenderer::Control>();
+  auto worker = std::make_unique<KeyframeWorker>(gatedMaker(control));
+  control->hold(true);
+  worker->request(requestAt(1));
+  ASSERT_TRUE(control->waitStarted(1));
+  worker->request(requestAt(2));
+  std::thread release([&] {
+    std::this_thread::sleep_for(30ms);
+    control->hold(false);
+  });
+  worker.reset();  // joins after the render in progress; request 2 is dropped
+  release.join();
+  std::lock_guard<std::mutex> lock(control->mutex);
+  EXPECT_EQ(control->started, 1);
+}
+
+}  // namespace
+}  // namespace vkloc

@@ -1,0 +1,42 @@
+// A small scene for the Localizer's tests: the checker box on the ground seen by a 320x240 camera
+// circling it at about 2 m, images rendered by the CPU reference renderer (no Vulkan).
+#pragma once
+
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "support/analytic_scenes.hpp"
+#include "vkloc/core/se3.hpp"
+#include "vkloc/render/cpu_renderer.hpp"
+
+namespace vkloc::test {
+
+inline PinholeCamera localizeCamera() { return PinholeCamera{260.0, 260.0, 159.5, 119.5, 320, 240}; }
+
+/// Camera pose of frame i: on a circle of radius 2 m around the box, 1.2 m up, 0.5 deg per frame.
+inline Pose localizeTruth(int i) {
+  const double a = -0.9 + 0.5 * M_PI / 180.0 * i;
+  return cameraLookingAt({2.0 * std::cos(a), 2.0 * std::sin(a), 1.2}, {0.0, 0.0, 0.15});
+}
+
+/// Gray images of frames 0..n-1 (cached per process: the CPU renderer takes a while).
+inline const std::vector<ImageU8>& localizeFrames(int n) {
+  static std::vector<ImageU8> frames;
+  if (static_cast<int>(frames.size()) < n) {
+    const Model model = makeBoxOnGround();
+    for (int i = static_cast<int>(frames.size()); i < n; ++i) {
+      auto view = renderReference(model, localizeCamera(), localizeTruth(i));
+      frames.push_back(view.ok() ? view->gray : ImageU8(320, 240, 1));
+    }
+  }
+  return frames;
+}
+
+inline double translationError(const Pose& a, const Pose& b) { return (a.translation() - b.translation()).norm(); }
+
+inline double rotationErrorDeg(const Pose& a, const Pose& b) {
+  return logSO3(a.linear().transpose() * b.linear()).norm() * 180.0 / M_PI;
+}
+
+}  // namespace vkloc::test

@@ -1,0 +1,170 @@
+// Tests of the motion priors (localize/motion_prior.hpp): constant velocity, IMU propagation,
+// the consistency gate and bridging, without any rendering.
+#include "vkloc/localize/motion_prior.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "vkloc/core/se3.hpp"
+#include "vkloc/sim/trajectory.hpp"
+
+namespace vkloc {
+namespace {
+
+constexpr int64_t kFrameNs = 50'000'000;
+
+Pose poseAt(double x, double yaw_deg) {
+  Pose T = Pose::Identity();
+  T.translation() = Eigen::Vector3d(x, 0.1 * x, 1.0);
+  T.linear() = expSO3(Eigen::Vector3d(0, 0, yaw_deg * M_PI / 180.0));
+  return T;
+}
+
+TEST(ConstantVelocityPrior, ExtrapolatesTheLastMotion) {
+  ConstantVelocityPrior prior;
+  EXPECT_FALSE(prior.predict(0).has_value());
+  prior.reset(poseAt(0, 0));
+  ASSERT_TRUE(prior.predict(kFrameNs).has_value());
+  EXPECT_TRUE(prior.predict(kFrameNs)->T_world_camera.isApprox(poseAt(0, 0)));  // no motion known yet
+  prior.addVisualPose(0, poseAt(0, 0), Matrix6d::Identity());
+  prior.addVisualPose(kFrameNs, poseAt(0.1, 2), Matrix6d::Identity());
+  // Twice the interval: twice the motion (a screw motion, here translation + yaw).
+  const Pose expected = poseAt(0.1, 2) * expSE3(2.0 * logSE3(poseAt(0, 0).inverse() * poseAt(0.1, 2)));
+  const auto p = prior.predict(3 * kFrameNs);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_FALSE(p->inertial);
+  EXPECT_TRUE(p->T_world_camera.isApprox(expected, 1e-12));
+  // More than 10 intervals ahead: the last pose.
+  EXPECT_TRUE(prior.predict(13 * kFrameNs)->T_world_camera.isApprox(poseAt(0.1, 2)));
+  // A frame without a visual pose keeps the motion; nothing is reported for it.
+  EXPECT_FALSE(prior.bridge(2 * kFrameNs, prior.predict(2 * kFrameNs), poseAt(5, 0)).has_value());
+  EXPECT_TRUE(prior.lastPose()->isApprox(poseAt(0.1, 2)));
+  EXPECT_TRUE(prior.consistent(*p, poseAt(100, 90), 1.0));  // no IMU: no gate
+}
+
+TEST(ConstantVelocityPrior, LastPoseModelAndReset) {
+  ConstantVelocityPrior prior(MotionModel::kLastPose);
+  prior.reset(poseAt(0, 0));
+  prior.addVisualPose(0, poseAt(0, 0), Matrix6d::Identity());
+  prior.addVisualPose(kFrameNs, poseAt(0.1, 2), Matrix6d::Identity());
+  EXPECT_TRUE(prior.predict(2 * kFrameNs)->T_world_camera.isApprox(poseAt(0.1, 2)));
+  Pose invalid = Pose::Identity();
+  invalid.linear() *= 2.0;
+  prior.reset(invalid);
+  EXPECT_FALSE(prior.predict(0).has_value());
+  // A bridged frame without any pose takes the guess as the last pose.
+  prior.bridge(0, std::nullopt, poseAt(3, 0));
+  EXPECT_TRUE(prior.lastPose()->isApprox(poseAt(3, 0)));
+  // Readings are checked even without an IMU model.
+  ImuSample s;
+  s.t_ns = 10;
+  EXPECT_TRUE(prior.addImu(s).ok());
+  EXPECT_FALSE(prior.addImu(s).ok());
+  s.t_ns = 20;
+  s.gyro_body.x() = NAN;
+  EXPECT_FALSE(prior.addImu(s).ok());
+}
+
+/// A drone-like trajectory with exact IMU readings; camera = body.
+struct Flight {
+  SplineTrajectory trajectory;
+  std::vector<ImuSample> imu;
+};
+
+Flight flight() {
+  TrajectoryOptions o;
+  o.kind = TrajectoryKind::kDroneFlight;
+  o.duration_s = 4.0;
+  o.seed = 3;
+  Aabb box;
+  box.min = {-50, -50, 0};
+  box.max = {50, 50, 20};
+  Flight f;
+  f.trajectory = *makeTrajectory(o, box);
+  f.imu = simulateImu(f.trajectory, std::nullopt, Eigen::Vector3d(0, 0, -9.81), 1);
+  return f;
+}
+
+TEST(InertialPrior, PredictsFromTheImuGatesAndBridges) {
+  const Flight f = flight();
+  InertialAiding aiding;
+  aiding.predictor.gravity_world = Eigen::Vector3d(0, 0, -9.81);
+  InertialPrior prior(aiding, MotionModel::kConstantVelocity);
+  const int64_t t0 = f.trajectory.startNs();
+  prior.reset(f.trajectory.evaluate(t0).T_world_body);
+  size_t next = 0;
+  auto feed = [&](int64_t t) {
+    for (; next < f.imu.size() && f.imu[next].t_ns <= t; ++next) ASSERT_TRUE(prior.addImu(f.imu[next]).ok());
+  };
+  // Visual poses (the truth) at 20 Hz for 1 s: then the IMU predicts.
+  int64_t t = t0;
+  for (int i = 0; i < 20; ++i, t += kFrameNs) {
+    feed(t);
+    prior.addVisualPose(t, f.trajectory.evaluate(t).T_world_body, Matrix6d::Identity() * 1e-6);
+  }
+  feed(t);
+  const auto p = prior.predict(t);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_TRUE(p->inertial);
+  const Pose truth = f.trajectory.evaluate(t).T_world_body;
+  EXPECT_LT((p->T_world_camera.translation() - truth.translation()).norm(), 0.01);
+  EXPECT_GT(p->sigma_m, 0.0);
+  // The gate: the truth passes, a pose 1 m off or 5 degrees turned does not.
+  EXPECT_TRUE(prior.consistent(*p, truth, 10.0));
+  Pose off = truth;
+  off.translation().x() += 1.0;
+  EXPECT_FALSE(prior.consistent(*p, off, 10.0));
+  Pose turned = truth;
+  turned.linear() = truth.linear() * expSO3(Eigen::Vector3d(0, 0, 5.0 * M_PI / 180.0));
+  EXPECT_FALSE(prior.consistent(*p, turned, 10.0));
+  // A frame without a visual pose reports the inertial one, with its uncertainty.
+  const auto bridged = prior.bridge(t, p, truth);
+  ASSERT_TRUE(bridged.has_value());
+  EXPECT_TRUE(bridged->T_world_camera.isApprox(p->T_world_camera));
+  EXPECT_NEAR(bridged->covariance(0, 0), p->sigma_m * p->sigma_m, 1e-15);
+  EXPECT_NEAR(bridged->covariance(3, 3), 1e-6, 1e-15);
+  // Past max_inertial_s without a visual pose the IMU prediction expires (constant velocity then).
+  const int64_t late = t + static_cast<int64_t>((aiding.max_inertial_s + 0.2) * 1e9);
+  feed(late);
+  const auto expired = prior.predict(late);
+  ASSERT_TRUE(expired.has_value());
+  EXPECT_FALSE(expired->inertial);
+}
+
+TEST(InertialPrior, DisabledAidingPredictsLikeConstantVelocity) {
+  const Flight f = flight();
+  InertialAiding aiding;
+  aiding.enabled = false;
+  InertialPrior prior(aiding, MotionModel::kConstantVelocity);
+  ConstantVelocityPrior plain;
+  const int64_t t0 = f.trajectory.startNs();
+  prior.reset(f.trajectory.evaluate(t0).T_world_body);
+  plain.reset(f.trajectory.evaluate(t0).T_world_body);
+  for (const ImuSample& s : f.imu) ASSERT_TRUE(prior.addImu(s).ok());
+  for (int i = 0; i < 10; ++i) {
+    const int64_t t = t0 + i * kFrameNs;
+    prior.addVisualPose(t, f.trajectory.evaluate(t).T_world_body, Matrix6d::Identity());
+    plain.addVisualPose(t, f.trajectory.evaluate(t).T_world_body, Matrix6d::Identity());
+  }
+  const int64_t t = t0 + 10 * kFrameNs;
+  ASSERT_FALSE(prior.predict(t)->inertial);
+  EXPECT_TRUE(prior.predict(t)->T_world_camera.isApprox(plain.predict(t)->T_world_camera, 0));
+  EXPECT_FALSE(prior.bridge(t, prior.predict(t), Pose::Identity()).has_value());
+}
+
+TEST(InertialAiding, OptionsOutOfRangeAreErrors) {
+  InertialAiding a;
+  EXPECT_TRUE(validateInertialAiding(a).ok());
+  a.gate_rotation_deg = 200;
+  EXPECT_FALSE(validateInertialAiding(a).ok());
+  a = InertialAiding{};
+  a.T_body_camera.linear() *= 2.0;
+  EXPECT_FALSE(validateInertialAiding(a).ok());
+  a = InertialAiding{};
+  a.predictor.window_fixes = 1;
+  EXPECT_FALSE(validateInertialAiding(a).ok());
+}
+
+}  // namespace
+}  // namespace vkloc
