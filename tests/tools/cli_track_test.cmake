@@ -40,7 +40,7 @@ run_ok("eval" eval --estimate ${WORK}/out/traj.txt --sequence ${seq} --frames ${
 
 # The tracking benchmark on the same sequence: both backends in one process, a row each.
 run_ok("bench track" bench track --sequence ${seq} --runs 1 --backends cpu,vulkan)
-if(NOT out MATCHES "\ncpu +[0-9.]+ +[0-9.]+" OR NOT out MATCHES "\nvulkan +[0-9.]+ +[0-9.]+")
+if(NOT out MATCHES "\ncpu +worker +[0-9.]+ +[0-9.]+" OR NOT out MATCHES "\nvulkan +sync +[0-9.]+ +[0-9.]+")
   message(FATAL_ERROR "bench track output lacks a row per backend:\n${out}")
 endif()
 run_fails("bench track, missing sequence" "not found" bench track --sequence ${WORK}/nope)

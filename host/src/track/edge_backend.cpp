@@ -8,6 +8,7 @@ Result<std::unique_ptr<CpuEdgeTrackingBackend>> CpuEdgeTrackingBackend::create(c
   VKLOC_TRY_STATUS(validateEdgeDetectorOptions(options.detector));
   LiveFrameOptions live = options;
   live.keep_intermediate = false;  // the tracker reads only the distance fields and edge lines
+  live.distance_gradient = false;  // evaluateEdgePoint computes it where it reads it
   return std::unique_ptr<CpuEdgeTrackingBackend>(new CpuEdgeTrackingBackend(camera, live));
 }
 

@@ -117,8 +117,21 @@ EdgePointEvaluation evaluateEdgePoint(const EdgePoint& point, const Pose& T_came
   if (!with_jacobian) return e;
   if (!on_line) {
     const ImageF32& G = level.field.gradient;
-    gu = w00 * G.at(x0, y0, 0) + w10 * G.at(x0 + 1, y0, 0) + w01 * G.at(x0, y0 + 1, 0) + w11 * G.at(x0 + 1, y0 + 1, 0);
-    gv = w00 * G.at(x0, y0, 1) + w10 * G.at(x0 + 1, y0, 1) + w01 * G.at(x0, y0 + 1, 1) + w11 * G.at(x0 + 1, y0 + 1, 1);
+    if (G.empty()) {
+      // Not built (LiveFrameOptions::distance_gradient): the same values from the distances.
+      float g00[2], g10[2], g01[2], g11[2];
+      distanceGradientAt(level.field, x0, y0, g00[0], g00[1]);
+      distanceGradientAt(level.field, x0 + 1, y0, g10[0], g10[1]);
+      distanceGradientAt(level.field, x0, y0 + 1, g01[0], g01[1]);
+      distanceGradientAt(level.field, x0 + 1, y0 + 1, g11[0], g11[1]);
+      gu = w00 * g00[0] + w10 * g10[0] + w01 * g01[0] + w11 * g11[0];
+      gv = w00 * g00[1] + w10 * g10[1] + w01 * g01[1] + w11 * g11[1];
+    } else {
+      gu =
+          w00 * G.at(x0, y0, 0) + w10 * G.at(x0 + 1, y0, 0) + w01 * G.at(x0, y0 + 1, 0) + w11 * G.at(x0 + 1, y0 + 1, 0);
+      gv =
+          w00 * G.at(x0, y0, 1) + w10 * G.at(x0 + 1, y0, 1) + w01 * G.at(x0, y0 + 1, 1) + w11 * G.at(x0 + 1, y0 + 1, 1);
+    }
   }
   // dr/dp = [G_u G_v] d(u, v)/dp (eq. 15), then dp/d(delta) = [I | -hat(p)]:
   // the rotation part -dr/dp hat(p) equals (p x dr/dp)^T.
@@ -341,7 +354,13 @@ Result<double> CpuEdgeAlignment::nearEdgeFraction(int level, double threshold_px
   const std::vector<float>& d = live_->levels[level].field.distance.data;
   if (d.empty()) return 0.0;
   size_t near_edge = 0;
-  for (float v : d) near_edge += v < threshold_px;
+  const auto threshold_f = static_cast<float>(threshold_px);
+  if (static_cast<double>(threshold_f) == threshold_px) {
+    // The threshold is a float: the same comparisons in float, which vectorise.
+    for (float v : d) near_edge += v < threshold_f;
+  } else {
+    for (float v : d) near_edge += v < threshold_px;
+  }
   return static_cast<double>(near_edge) / static_cast<double>(d.size());
 }
 
@@ -351,10 +370,10 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, const LiveFrame& 
   for (const LiveLevel& level : live.levels) {
     const DistanceField& f = level.field;
     if (f.distance.width != level.camera.width || f.distance.height != level.camera.height ||
-        f.distance.channels != 1 || f.gradient.width != f.distance.width || f.gradient.height != f.distance.height ||
-        f.gradient.channels != 2 ||
-        f.distance.data.size() != static_cast<size_t>(f.distance.width) * f.distance.height ||
-        f.gradient.data.size() != 2 * f.distance.data.size() || !(f.truncation_px > 0)) {
+        f.distance.channels != 1 ||
+        (!f.gradient.empty() && (f.gradient.width != f.distance.width || f.gradient.height != f.distance.height ||
+                                 f.gradient.channels != 2 || f.gradient.data.size() != 2 * f.distance.data.size())) ||
+        f.distance.data.size() != static_cast<size_t>(f.distance.width) * f.distance.height || !(f.truncation_px > 0)) {
       return makeError(ErrorCode::kInvalidArgument,
                        "trackFrame: a live level's distance field does not match its camera");
     }

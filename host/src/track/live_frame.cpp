@@ -72,6 +72,37 @@ ImageF32 downsampleHalf(const ImageF32& image) {
   return out;
 }
 
+void distanceGradientAt(const DistanceField& field, int x, int y, float& g_u, float& g_v) {
+  const int w = field.distance.width;
+  const int h = field.distance.height;
+  const float t = field.truncation_px;
+  const float* D = field.distance.data.data();
+  const float* row = D + static_cast<size_t>(y) * w;
+  const int ylo = std::max(y - 1, 0);
+  const int yhi = std::min(y + 1, h - 1);
+  const float up = D[static_cast<size_t>(ylo) * w + x];
+  const float down = D[static_cast<size_t>(yhi) * w + x];
+  const float inv_dy = yhi > ylo ? 1.0f / static_cast<float>(yhi - ylo) : 0.0f;
+  const float c = row[x];
+  if (x == 0 || x == w - 1) {
+    // The border columns of computeDistanceGradient.
+    auto diff = [t](float centre, float a, float b, float scale) {
+      const bool known = (centre < t) & (a < t) & (b < t);
+      return (b - a) * scale * static_cast<float>(known);
+    };
+    const int xlo = std::max(x - 1, 0);
+    const int xhi = std::min(x + 1, w - 1);
+    g_u = xhi > xlo ? diff(c, row[xlo], row[xhi], 1.0f / static_cast<float>(xhi - xlo)) : 0.0f;
+    g_v = diff(c, up, down, inv_dy);
+    return;
+  }
+  const float l = row[x - 1], r = row[x + 1];
+  const float ku = (c < t && l < t && r < t) ? 0.5f : 0.0f;
+  const float kv = (c < t && up < t && down < t) ? inv_dy : 0.0f;
+  g_u = (r - l) * ku;
+  g_v = (down - up) * kv;
+}
+
 void computeDistanceGradient(DistanceField& field) {
   const int w = field.distance.width;
   const int h = field.distance.height;
@@ -195,8 +226,10 @@ void truncatedDistanceTransform(const ImageU8& edges, float truncation_px, float
   }
 }
 
-/// computeDistanceField into `field`, reusing its memory and the scratch.
-Status computeDistanceFieldInto(const ImageU8& edges, float truncation_px, DistanceField& field, DistanceScratch& sc) {
+/// computeDistanceField into `field`, reusing its memory and the scratch; the gradient only when
+/// `with_gradient` (else it is left empty).
+Status computeDistanceFieldInto(const ImageU8& edges, float truncation_px, DistanceField& field, DistanceScratch& sc,
+                                bool with_gradient = true) {
   if (edges.empty() || edges.channels != 1 || edges.data.size() != static_cast<size_t>(edges.width) * edges.height) {
     return makeError(ErrorCode::kInvalidArgument, "computeDistanceField: expected a non-empty single-channel edge map");
   }
@@ -214,7 +247,11 @@ Status computeDistanceFieldInto(const ImageU8& edges, float truncation_px, Dista
     image.data.resize(static_cast<size_t>(width) * height * channels);
   };
   size(field.distance, w, h, 1);
-  size(field.gradient, w, h, 2);
+  if (with_gradient) {
+    size(field.gradient, w, h, 2);
+  } else {
+    field.gradient = ImageF32{};
+  }
   if (truncation_px <= static_cast<float>(kSeparableMaxTruncationPx)) {
     truncatedDistanceTransform(edges, truncation_px, field.distance.data.data(), sc);
   } else {
@@ -238,7 +275,7 @@ Status computeDistanceFieldInto(const ImageU8& edges, float truncation_px, Dista
       for (float& d : field.distance.data) d = std::min(d, t);
     }
   }
-  computeDistanceGradient(field);
+  if (with_gradient) computeDistanceGradient(field);
   return Status::success();
 }
 
@@ -253,13 +290,35 @@ Result<DistanceField> computeDistanceField(const ImageU8& edges, float truncatio
 
 namespace {
 
+/// Working buffers of computeEdgeLines kept between frames of one level.
+struct EdgeLineScratch {
+  std::vector<float> best;       ///< Squared distance of the nearest edge point so far, per pixel.
+  std::vector<int> written;      ///< Pixels the last call wrote (the only ones not in the cleared state).
+  const float* lines = nullptr;  ///< The lines buffer the last call wrote into.
+};
+
 /// LiveLevel::edge_lines of an edge map: every edge pixel splats its sub-pixel line into the
 /// pixels within kEdgeLineRadiusPx of its edge point; a pixel keeps the nearest edge point.
-void computeEdgeLines(const ImageU8& edges, const EdgeGradients& g, ImageF32& lines, std::vector<float>& best) {
+/// Only the pixels the previous frame wrote are cleared (most of a frame is far from edges),
+/// which leaves the same state as clearing everything.
+void computeEdgeLines(const ImageU8& edges, const EdgeGradients& g, ImageF32& lines, EdgeLineScratch& sc) {
   const int w = edges.width;
   const int h = edges.height;
-  resetImage(lines, w, h, 3, 0.0f);
-  best.assign(static_cast<size_t>(w) * h, kEdgeLineRadiusPx * kEdgeLineRadiusPx);
+  const size_t n = static_cast<size_t>(w) * h;
+  const float far2 = kEdgeLineRadiusPx * kEdgeLineRadiusPx;
+  if (lines.width == w && lines.height == h && lines.channels == 3 && lines.data.size() == 3 * n &&
+      sc.lines == lines.data.data() && sc.best.size() == n) {
+    for (const int i : sc.written) {
+      float* out = &lines.data[static_cast<size_t>(i) * 3];
+      out[0] = out[1] = out[2] = 0.0f;
+      sc.best[static_cast<size_t>(i)] = far2;
+    }
+  } else {
+    resetImage(lines, w, h, 3, 0.0f);
+    sc.best.assign(n, far2);
+  }
+  sc.written.clear();
+  sc.lines = lines.data.data();
   const int r = static_cast<int>(std::ceil(kEdgeLineRadiusPx));
   for (int y = 1; y < h - 1; ++y) {
     const uint8_t* row = &edges.data[static_cast<size_t>(y) * w];
@@ -280,10 +339,12 @@ void computeEdgeLines(const ImageU8& edges, const EdgeGradients& g, ImageF32& li
           const float ou = static_cast<float>(qx) - eu;
           const float ov = static_cast<float>(qy) - ev;
           const float d2 = ou * ou + ov * ov;
-          float& b = best[static_cast<size_t>(qy) * w + qx];
+          const int i = qy * w + qx;
+          float& b = sc.best[static_cast<size_t>(i)];
           if (d2 >= b) continue;
+          if (b == far2) sc.written.push_back(i);  // first write since the clear
           b = d2;
-          float* out = &lines.data[(static_cast<size_t>(qy) * w + qx) * 3];
+          float* out = &lines.data[static_cast<size_t>(i) * 3];
           out[0] = nu * ou + nv * ov;
           out[1] = nu;
           out[2] = nv;
@@ -326,7 +387,11 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
     if (static_cast<int>(pyramid.size()) <= level) pyramid.resize(static_cast<size_t>(level) + 1);
     ImageF32& level_gray = pyramid[static_cast<size_t>(level)];
     if (level == 0) {
-      resetImage(level_gray, gray.width, gray.height, 1, 0.0f);
+      // Sized only: every value is written below.
+      level_gray.width = gray.width;
+      level_gray.height = gray.height;
+      level_gray.channels = 1;
+      level_gray.data.resize(gray.data.size());
       for (size_t i = 0; i < gray.data.size(); ++i) level_gray.data[i] = gray.data[i];
     } else {
       const ImageF32& finer = pyramid[static_cast<size_t>(level) - 1];
@@ -346,7 +411,7 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
     EdgeGradients gradients;
     ImageU8 edges;
     DistanceScratch distance;
-    std::vector<float> best;
+    EdgeLineScratch lines;
   };
   thread_local std::vector<LevelScratch> level_scratch;
   if (level_scratch.size() < static_cast<size_t>(built)) level_scratch.resize(static_cast<size_t>(built));
@@ -361,14 +426,15 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
   };
   auto fieldOf = [&](int level) {
     LevelScratch& sc = scratch[static_cast<size_t>(level)];
-    status[static_cast<size_t>(built + level)] = computeDistanceFieldInto(
-        sc.edges, options.truncation_px, frame.levels[static_cast<size_t>(level)].field, sc.distance);
+    status[static_cast<size_t>(built + level)] =
+        computeDistanceFieldInto(sc.edges, options.truncation_px, frame.levels[static_cast<size_t>(level)].field,
+                                 sc.distance, options.distance_gradient);
   };
   auto linesOf = [&](int level) {
     LevelScratch& sc = scratch[static_cast<size_t>(level)];
     LiveLevel& out = frame.levels[static_cast<size_t>(level)];
     if (options.subpixel_edges) {
-      computeEdgeLines(sc.edges, sc.gradients, out.edge_lines, sc.best);
+      computeEdgeLines(sc.edges, sc.gradients, out.edge_lines, sc.lines);
     } else {
       out.edge_lines = ImageF32{};
     }

@@ -54,7 +54,7 @@ struct KeyframeManagerOptions {
   RerenderThresholds thresholds;
   KeyframeThreading threading = KeyframeThreading::kWorkerThread;
   /// Worker mode: run the worker thread at the lowest priority (KeyframeWorker).
-  bool background_worker = true;
+  bool background_worker = false;
   /// Learn which geometric edges the live images show (an unlit render's creases and silhouettes
   /// may have no intensity edge in them, and rims of model holes none at all): after each tracked
   /// frame, the running mean (weight 0.3) of the inlier ratio of occlusion points, of crease

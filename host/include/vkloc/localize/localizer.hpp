@@ -65,11 +65,11 @@ struct LocalizerOptions {
   /// be ready (its measured making time over the measured time per frame), at most this many
   /// frames ahead.
   int max_keyframe_lead_frames = 4;
-  /// Worker mode: run the worker thread at the lowest scheduling priority (Linux SCHED_IDLE)
-  /// and make its keyframes without OpenCV's thread pool, so that the tracking thread keeps its
-  /// core and the pool on a machine with few cores. Waiting keyframes (start, loss) are made
-  /// on the caller's thread at its priority.
-  bool keyframe_worker_background = true;
+  /// Worker mode: run the worker thread at the lowest scheduling priority (Linux SCHED_IDLE):
+  /// tracking frames are then never slowed by keyframe making, but on a machine whose cores
+  /// other work keeps busy the worker may get no time at all and keyframes age (README,
+  /// "Performance"). Waiting keyframes (start, loss) are made on the caller's thread either way.
+  bool keyframe_worker_background = false;
   /// Near/far clip planes (metres) and back-face culling of keyframe renders; `outputs` is set
   /// by the Localizer (colour, depth and normals are always rendered).
   RenderSettings render;

@@ -35,6 +35,7 @@ struct DistanceField {
   /// 2 channels (G_u, G_v), pixels per pixel: central differences (d(i+1) - d(i-1)) / 2 of
   /// `distance` along u and v; one-sided differences on the image border; (0, 0) where the
   /// distance or a neighbour used is truncated (no direction to an edge is known there).
+  /// Empty when not built (LiveFrameOptions::distance_gradient).
   ImageF32 gradient;
   float truncation_px = 0;  ///< Distances >= this are "far from any edge" (outliers).
 };
@@ -42,6 +43,10 @@ struct DistanceField {
 /// The gradient of a distance field from its distances: field.gradient (resized when needed)
 /// from field.distance and field.truncation_px, by the rule of DistanceField::gradient.
 void computeDistanceGradient(DistanceField& field);
+
+/// DistanceField::gradient at pixel (x, y), computed from the distances by the rule of
+/// computeDistanceGradient (the same floats). Precondition: (x, y) inside the field.
+void distanceGradientAt(const DistanceField& field, int x, int y, float& g_u, float& g_v);
 
 /// Distance field of an edge map (non-zero = edge). With no edge at all every distance is
 /// truncation_px. kInvalidArgument for an empty or multi-channel map or truncation_px <= 0.
@@ -54,6 +59,10 @@ struct LiveFrameOptions {
   EdgeDetectorOptions detector;   ///< Edge detector used at every level.
   bool keep_intermediate = true;  ///< Keep gray and edge images per level (for display/tests).
   bool subpixel_edges = true;     ///< Also build LiveLevel::edge_lines (sub-pixel edge lines).
+  /// Build DistanceField::gradient. false leaves it empty: the tracker (evaluateEdgePoint)
+  /// then computes the gradient at the pixels it reads from the distances, by the same rule
+  /// (distanceGradientAt), and the results are the same.
+  bool distance_gradient = true;
 };
 
 /// Radius (pixels of a level) around live edge pixels within which LiveLevel::edge_lines is
