@@ -4,9 +4,22 @@
 
 #include <atomic>
 #include <fstream>
+#include <opencv2/core/utility.hpp>
 #include <random>
 
 namespace vkloc::test {
+
+#if defined(__SANITIZE_THREAD__)
+namespace {
+// OpenCV's parallel loops run on TBB's threads, which ThreadSanitizer cannot see synchronise
+// (TBB is not instrumented): under TSan they run on the calling thread, leaving vkloc's own
+// threads (the keyframe worker) to check.
+const bool kOpenCvSerial = [] {
+  cv::setNumThreads(0);
+  return true;
+}();
+}  // namespace
+#endif
 
 TempDir::TempDir(const std::string& tag) {
   static std::atomic<int> counter{0};

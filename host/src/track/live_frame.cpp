@@ -167,8 +167,9 @@ struct DistanceScratch {
 /// capped); candidates from columns with no edge within R rows are >= (R + 1)^2 >= truncation^2. Both passes are
 /// plain min/add loops over rows of int16 that compilers vectorise: on a 640x480 frame with
 /// R = 20 this is 3-4x faster than cv::distanceTransform on the same core count.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
 // Wider vectors where the CPU has them (chosen once at load time; the baseline build is SSE2).
+// Not under ThreadSanitizer, whose instrumented ifunc resolver runs before its runtime is up.
 __attribute__((target_clones("avx2", "default")))
 #endif
 void truncatedDistanceTransform(const ImageU8& edges, float truncation_px, float* distance, DistanceScratch& sc) {
