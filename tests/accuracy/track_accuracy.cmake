@@ -1,6 +1,7 @@
 # One accuracy case of `vkloc track`. Arguments: -DVKLOC=path -DWORK=dir -DCASE=name [-DFRAMES=n].
 #   castle         ViSP Castle-simu from the GT first pose: mean error <= 2 mm and <= 0.2 deg, none lost
 #   castle_offset  same from a first pose 2 cm / 5 deg off: converges (none lost, mean <= 2 mm, 0.2 deg)
+# Each case runs with keyframes on the worker thread (the default) and made synchronously.
 #   city_hard, room_hard  simulated: per policy (every-frame, when-needed) no frame lost (at most a
 #                  quarter bridged by the IMU alone), median translation error <= 0.5 % of the
 #                  median scene depth, median rotation <= 0.3 deg
@@ -24,17 +25,17 @@ function(json_number var file key)
 endfunction()
 
 # Tracks `seq` and checks the figures; appends a failure line to the parent's `failures`.
-function(track_and_check label seq policy extra)
-  set(dir ${WORK}/${label}_${policy})
+function(track_and_check label seq policy mode extra)
+  set(dir ${WORK}/${label}_${policy}_${mode})
   file(REMOVE_RECURSE ${dir})
-  run("track ${label} ${policy}" ${VKLOC} track --sequence ${seq} --out ${dir}/trajectory.txt
-      --report ${dir}/report --policy ${policy} --quiet ${extra})
+  run("track ${label} ${policy} ${mode}" ${VKLOC} track --sequence ${seq} --out ${dir}/trajectory.txt
+      --report ${dir}/report --policy ${policy} --keyframes ${mode} --quiet ${extra})
   set(j ${dir}/report/track.json)
   foreach(key frames lost inertial visual_rejected hz_median startup_ms first_frame_ms scene_depth_median_m translation_median_m
               translation_mean_m rotation_median_deg rotation_mean_deg localized_fraction translation_median_over_depth)
     json_number(${key} ${j} ${key})
   endforeach()
-  message(STATUS "${label} ${policy}: ${frames} frames, lost ${lost}, inertial only ${inertial} (visual rejected "
+  message(STATUS "${label} ${policy} ${mode}: ${frames} frames, lost ${lost}, inertial only ${inertial} (visual rejected "
                  "${visual_rejected}), translation median ${translation_median_m} m "
                  "mean ${translation_mean_m} m, rotation median ${rotation_median_deg} deg mean ${rotation_mean_deg} "
                  "deg, scene depth ${scene_depth_median_m} m, ${hz_median} Hz (start-up ${startup_ms} ms, first "
@@ -74,7 +75,7 @@ function(track_and_check label seq policy extra)
     endif()
   endif()
   if(bad)
-    set(failures "${failures}\n  ${label} ${policy}:${bad}" PARENT_SCOPE)
+    set(failures "${failures}\n  ${label} ${policy} ${mode}:${bad}" PARENT_SCOPE)
   endif()
 endfunction()
 
@@ -91,11 +92,16 @@ if(CASE MATCHES "^castle")
   endif()
   if(CASE STREQUAL "castle")
     foreach(policy every-frame when-needed)
-      track_and_check(castle ${seq} ${policy} "")
+      foreach(mode worker sync)
+        track_and_check(castle ${seq} ${policy} ${mode} "")
+      endforeach()
     endforeach()
   else()
     # 2 cm (1.155 cm per axis) and 5 degrees (2.887 degrees about each camera axis).
-    track_and_check(castle_offset ${seq} when-needed "--init-offset=0.011547,0.011547,0.011547,2.8868,2.8868,2.8868")
+    foreach(mode worker sync)
+      track_and_check(castle_offset ${seq} when-needed ${mode}
+                      "--init-offset=0.011547,0.011547,0.011547,2.8868,2.8868,2.8868")
+    endforeach()
   endif()
 else()
   string(REGEX MATCH "^(city|room)_(easy|hard)$" ok "${CASE}")
@@ -111,7 +117,9 @@ else()
   file(REMOVE_RECURSE ${seq})
   run("simulate ${CASE}" ${VKLOC} simulate ${scene} ${difficulty} --frames ${FRAMES} --out ${seq})
   foreach(policy every-frame when-needed)
-    track_and_check(${CASE} ${seq} ${policy} "")
+    foreach(mode worker sync)
+      track_and_check(${CASE} ${seq} ${policy} ${mode} "")
+    endforeach()
   endforeach()
 endif()
 if(failures)
