@@ -22,8 +22,7 @@ struct DemoArgs {
   std::string scene = "room";
   std::string difficulty = "hard";
   size_t frames = 100;
-  std::string backend = "auto";
-  std::string policy = "when-needed";
+  LocalizerArgs localizer;
   bool no_track = false;
 };
 
@@ -51,8 +50,8 @@ void runLocalization(const DemoArgs& a, const std::shared_ptr<GpuContext>& conte
   std::fflush(stdout);
   const std::string out = (std::filesystem::path(a.out_dir) / (name + "_trajectory.txt")).string();
   const std::string report_dir = (std::filesystem::path(a.out_dir) / (name + "_report")).string();
-  std::vector<std::string> args = {"--sequence", seq_dir,     "--out",   out,        "--report",
-                                   report_dir,   "--backend", a.backend, "--policy", a.policy};
+  std::vector<std::string> args = {"--sequence", seq_dir, "--out", out, "--report", report_dir};
+  for (const std::string& arg : a.localizer.arguments()) args.push_back(arg);
   if (!a.device.device.empty()) {
     args.push_back("--device");
     args.push_back(a.device.device);
@@ -114,12 +113,7 @@ static void addDemoVerb(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--frames", args->frames, "Frames to simulate and localize (0 = render views only)")
       ->capture_default_str();
-  cmd->add_option("--backend", args->backend, "Live edges + alignment: auto | vulkan | cpu")
-      ->check(CLI::IsMember({"auto", "vulkan", "cpu"}))
-      ->capture_default_str();
-  cmd->add_option("--policy", args->policy, "Reference re-rendering: every-frame | when-needed")
-      ->check(CLI::IsMember({"every-frame", "when-needed"}))
-      ->capture_default_str();
+  args->localizer.add(*cmd);
   cmd->add_flag("--no-track", args->no_track, "Only render the demo views");
   args->device.add(*cmd);
   args->camera.add(*cmd);

@@ -27,9 +27,7 @@ struct TrackArgs {
   std::string sequence;
   std::string out = "trajectory.txt";
   std::string frames_csv;
-  std::string backend = "auto";
-  std::string policy = "when-needed";
-  std::string keyframes = "worker";
+  LocalizerArgs localizer;
   std::string motion = "constant-velocity";
   size_t max_frames = 0;
   std::string report_dir;
@@ -60,9 +58,7 @@ void run(const TrackArgs& a) {
   if (seq.images.empty()) throw Failure{fmt::format("{}: images.txt lists no image", a.sequence)};
   const PinholeCamera camera = sequenceCamera(seq);
   LocalizerOptions options;
-  options.backend = take(parseLocalizerBackend(a.backend));
-  options.policy = take(parseRerenderPolicy(a.policy));
-  options.keyframe_threading = take(parseKeyframeThreading(a.keyframes));
+  a.localizer.apply(options);
   options.calibrate_backend = a.calibrate;
   if (a.motion == "last-pose") {
     options.motion = MotionModel::kLastPose;
@@ -190,8 +186,9 @@ void run(const TrackArgs& a) {
       "{:.3f},\n"
       "  \"hz_median\": {:.3f},\n  \"first_tracked_frame\": {},\n  \"lost_after_first_tracked\": {},\n  "
       "\"scene_depth_median_m\": {:.6g}",
-      seq.name, total, lost, inertial, rejected, rerendered, localizerBackendName(options.backend), a.policy, setup_ms,
-      first_frame_ms, total_ms.empty() ? 0.0 : median(total_ms), hz, first_tracked, lost_after_first, median(depths));
+      seq.name, total, lost, inertial, rejected, rerendered, localizerBackendName(options.backend), a.localizer.policy,
+      setup_ms, first_frame_ms, total_ms.empty() ? 0.0 : median(total_ms), hz, first_tracked, lost_after_first,
+      median(depths));
   std::filesystem::path report_dir = a.report_dir.empty()
                                          ? out_path.parent_path() / (out_path.stem().string() + "_report")
                                          : std::filesystem::path(a.report_dir);
@@ -245,16 +242,7 @@ void addTrackOptions(CLI::App* cmd, const std::shared_ptr<TrackArgs>& args) {
       ->capture_default_str();
   cmd->add_option("--frames-csv", args->frames_csv,
                   "Per-frame log (t_ns, state, stage *_ms, quality); default <out stem>_frames.csv");
-  cmd->add_option("--backend", args->backend, "Live edges + alignment: auto | vulkan | cpu")
-      ->check(CLI::IsMember({"auto", "vulkan", "cpu"}))
-      ->capture_default_str();
-  cmd->add_option("--policy", args->policy, "Reference re-rendering: every-frame | when-needed")
-      ->check(CLI::IsMember({"every-frame", "when-needed"}))
-      ->capture_default_str();
-  cmd->add_option("--keyframes", args->keyframes,
-                  "Where keyframes are made: worker (a thread beside tracking) | sync (deterministic)")
-      ->check(CLI::IsMember({"worker", "sync"}))
-      ->capture_default_str();
+  args->localizer.add(*cmd);
   cmd->add_option("--motion", args->motion, "Pose prediction: constant-velocity | last-pose")->capture_default_str();
   cmd->add_option("--max-frames", args->max_frames, "Track only the first N images (0 = all)")->capture_default_str();
   cmd->add_option("--report", args->report_dir,

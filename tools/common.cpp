@@ -73,6 +73,29 @@ PinholeCamera CameraArgs::get() const {
   return cam;
 }
 
+void LocalizerArgs::add(CLI::App& app) {
+  app.add_option("--backend", backend, "Live edges + alignment: auto | vulkan | cpu")
+      ->check(CLI::IsMember({"auto", "vulkan", "cpu"}))
+      ->capture_default_str();
+  app.add_option("--policy", policy, "Keyframe re-rendering: every-frame | when-needed")
+      ->check(CLI::IsMember({"every-frame", "when-needed"}))
+      ->capture_default_str();
+  app.add_option("--keyframes", keyframes,
+                 "Where keyframes are made: worker (a thread beside tracking) | sync (deterministic)")
+      ->check(CLI::IsMember({"worker", "sync"}))
+      ->capture_default_str();
+}
+
+void LocalizerArgs::apply(LocalizerOptions& options) const {
+  options.backend = take(parseLocalizerBackend(backend));
+  options.policy = take(parseRerenderPolicy(policy));
+  options.keyframe_threading = take(parseKeyframeThreading(keyframes));
+}
+
+std::vector<std::string> LocalizerArgs::arguments() const {
+  return {"--backend", backend, "--policy", policy, "--keyframes", keyframes};
+}
+
 void DeviceArgs::add(CLI::App& app) {
   app.add_option("--device,-d", device, "Vulkan device: index or part of its name (default: best; env VKLOC_DEVICE)");
 }

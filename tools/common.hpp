@@ -52,6 +52,18 @@ struct CameraArgs {
   PinholeCamera get() const;
 };
 
+/// Where and how the Localizer runs: --backend, --policy, --keyframes (vkloc track, vkloc demo).
+struct LocalizerArgs {
+  std::string backend = "auto";
+  std::string policy = "when-needed";
+  std::string keyframes = "worker";
+  void add(CLI::App& app);
+  /// Sets the options' backend, policy and keyframe threading; throws Failure on a bad value.
+  void apply(LocalizerOptions& options) const;
+  /// The same as command-line arguments (to hand on to `vkloc track`).
+  std::vector<std::string> arguments() const;
+};
+
 /// Device options.
 struct DeviceArgs {
   std::string device;

@@ -21,10 +21,7 @@ constexpr const char* kNoDriverMessage =
     "no Vulkan device found: install a Vulkan driver (apt-get install mesa-vulkan-drivers for "
     "the CPU driver lavapipe, or your GPU vendor's driver)";
 
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
+using text::lower;
 
 const char* deviceTypeName(VkPhysicalDeviceType t) {
   switch (t) {

@@ -145,6 +145,15 @@ std::string parseInt64(std::string_view token, int64_t& out) {
   return {};
 }
 
+std::string parseUint64(std::string_view token, uint64_t& out) {
+  const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), out);
+  if (token.empty() || ec != std::errc() || end != token.data() + token.size()) {
+    if (ec == std::errc::result_out_of_range) return shown(token) + " is out of range";
+    return shown(token) + " is not a whole number";
+  }
+  return {};
+}
+
 std::string parseSecondsToNs(std::string_view token, int64_t& out) {
   const std::string bad = "timestamp " + shown(token) + " is not a number of seconds";
   const std::string range = "timestamp " + shown(token) + " is out of range";
@@ -187,7 +196,7 @@ std::string parseSecondsToNs(std::string_view token, int64_t& out) {
     bool round_up = false;
     if (drop <= digits.size()) {
       round_up = digits[digits.size() - drop] >= '5';
-      digits.resize(digits.size() - drop);
+      digits = digits.substr(0, digits.size() - drop);  // (not resize(): GCC 12 -Wrestrict false positive)
     } else {
       digits.clear();
     }

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "vkloc/core/atomic_file.hpp"
+#include "vkloc/core/text.hpp"
 #include "vkloc/eval/report.hpp"
 
 #ifndef VKLOC_CHARTJS_PATH
@@ -274,16 +275,9 @@ if(D.timing){const cols=['#000','#1f77b4','#ff7f0e','#2ca02c','#d62728','#9467bd
 const char* defaultChartJsPath() { return VKLOC_CHARTJS_PATH; }
 
 Result<std::string> loadChartJs(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
-    return makeError(ErrorCode::kNotFound, fmt::format("{}: Chart.js not found", path));
-  }
-  std::ifstream f(path, std::ios::binary);
-  if (!f) return makeError(ErrorCode::kIoError, fmt::format("{}: cannot open", path));
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  if (f.bad()) return makeError(ErrorCode::kIoError, fmt::format("{}: read error", path));
-  std::string text = ss.str();
+  Result<std::string> read = text::readFile(path, "Chart.js");
+  if (!read.ok()) return read.error();
+  std::string text = std::move(read).value();
   if (text.empty() || text.find("Chart") == std::string::npos) {
     return makeError(ErrorCode::kMalformedInput, fmt::format("{}: does not look like Chart.js", path));
   }

@@ -117,12 +117,9 @@ std::vector<double> yamlNumbers(const YAML::Node& node, const char* key) {
 }
 
 Result<YAML::Node> loadYamlFile(const std::string& path) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) return makeError(ErrorCode::kNotFound, fmt::format("{}: file not found", path));
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  std::string text = buffer.str();
+  Result<std::string> read = text::readFile(path, "file");
+  if (!read.ok()) return read.error();
+  std::string text = std::move(read).value();
   // OpenCV-style files start with "%YAML:1.0", which is not a valid YAML directive.
   if (text.rfind("%YAML:", 0) == 0) text[0] = '#';
   try {

@@ -29,22 +29,6 @@ Error fileError(ErrorCode code, const std::string& path, const std::string& what
   return makeError(code, path + ": " + text::oneLine(what));
 }
 
-std::string trim(std::string_view s) { return std::string(text::trim(s)); }
-
-std::vector<std::string> splitWhitespace(const std::string& s) {
-  std::vector<std::string> out;
-  for (std::string_view field : text::splitFields(s)) out.emplace_back(field);
-  return out;
-}
-
-bool parseDouble(std::string_view token, double& value) { return text::parseDouble(token, value).empty(); }
-
-bool parseIndex(std::string_view token, uint64_t& value) {
-  const char* end = token.data() + token.size();
-  const auto r = std::from_chars(token.data(), end, value);
-  return r.ec == std::errc() && r.ptr == end;
-}
-
 std::string lowerExtension(const std::string& path) { return text::lower(fs::path(path).extension().string()); }
 
 Result<std::string> readText(const std::string& path) { return text::readFile(path, "file", kMaxTextBytes); }
@@ -58,7 +42,7 @@ std::optional<std::string> xmlTag(const std::string& text, const std::string& ta
   const size_t e = text.find(close, b + open.size());
   if (e == std::string::npos || e > to) return std::nullopt;
   if (end_pos) *end_pos = e + close.size();
-  return trim(std::string_view(text).substr(b + open.size(), e - b - open.size()));
+  return std::string(text::trim(std::string_view(text).substr(b + open.size(), e - b - open.size())));
 }
 
 /// Number n in a file name "<prefix>n.<ext>", or nullopt.
@@ -67,7 +51,9 @@ std::optional<uint64_t> numberedFile(const std::string& name, const std::string&
   const size_t dot = name.find('.', prefix.size());
   if (dot == std::string::npos || dot == prefix.size()) return std::nullopt;
   uint64_t n = 0;
-  if (!parseIndex(std::string_view(name).substr(prefix.size(), dot - prefix.size()), n)) return std::nullopt;
+  if (!text::parseUint64(std::string_view(name).substr(prefix.size(), dot - prefix.size()), n).empty()) {
+    return std::nullopt;
+  }
   return n;
 }
 
@@ -87,7 +73,7 @@ Result<Pose> loadVispPose(const std::string& path) {
   std::replace(s.begin(), s.end(), ';', ' ');
   std::replace(s.begin(), s.end(), '[', ' ');
   std::replace(s.begin(), s.end(), ']', ' ');
-  const std::vector<std::string> tokens = splitWhitespace(s);
+  const std::vector<std::string_view> tokens = text::splitFields(s);
   if (tokens.size() != 16) {
     return fileError(ErrorCode::kMalformedInput, path,
                      fmt::format("expected a 4x4 matrix (16 numbers), found {} values", tokens.size()));
@@ -95,7 +81,7 @@ Result<Pose> loadVispPose(const std::string& path) {
   Eigen::Matrix4d M;
   for (int i = 0; i < 16; ++i) {
     double v = 0.0;
-    if (!parseDouble(tokens[static_cast<size_t>(i)], v)) {
+    if (!text::parseDouble(tokens[static_cast<size_t>(i)], v).empty()) {
       return fileError(ErrorCode::kMalformedInput, path,
                        fmt::format("value {} '{}' is not a finite number", i + 1, tokens[static_cast<size_t>(i)]));
     }
@@ -146,7 +132,7 @@ Result<PinholeCamera> loadVispCameraXml(const std::string& path, int width, int 
   for (const auto& [tag, value] : fields) {
     auto content = xmlTag(text, tag, from, to);
     if (!content) return fileError(ErrorCode::kMalformedInput, path, fmt::format("no <{}> element", tag));
-    if (!parseDouble(*content, *value)) {
+    if (!text::parseDouble(*content, *value).empty()) {
       return fileError(ErrorCode::kMalformedInput, path,
                        fmt::format("<{}> '{}' is not a finite number", tag, *content));
     }
@@ -159,7 +145,7 @@ Result<PinholeCamera> loadVispCameraXml(const std::string& path, int width, int 
     if (!content) {
       return fileError(ErrorCode::kMalformedInput, path, fmt::format("no <{}> element and no image size given", tag));
     }
-    if (!parseIndex(*content, v) || v == 0 || v > 16384) {
+    if (!text::parseUint64(*content, v).empty() || v == 0 || v > 16384) {
       return fileError(ErrorCode::kMalformedInput, path, fmt::format("<{}> '{}' is not a valid size", tag, *content));
     }
     *value = static_cast<int>(v);

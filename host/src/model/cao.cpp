@@ -45,11 +45,7 @@ std::vector<std::string> splitWhitespace(const std::string& s) {
 
 bool parseDouble(std::string_view token, double& value) { return text::parseDouble(token, value).empty(); }
 
-bool parseIndex(std::string_view token, uint64_t& value) {
-  const char* end = token.data() + token.size();
-  const auto r = std::from_chars(token.data(), end, value);
-  return r.ec == std::errc() && r.ptr == end;
-}
+bool parseIndex(std::string_view token, uint64_t& value) { return text::parseUint64(token, value).empty(); }
 
 Result<std::string> readText(const std::string& path) {
   auto bytes = model_detail::readFileBytes(path, kMaxTextBytes);

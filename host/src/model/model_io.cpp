@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "model/model_internal.hpp"
+#include "vkloc/core/text.hpp"
 #include "vkloc/model/cao.hpp"
 
 namespace vkloc {
@@ -23,13 +24,7 @@ Error fileError(ErrorCode code, const std::string& path, const std::string& what
   return makeError(code, oneLine(path + ": " + what));
 }
 
-std::string oneLine(std::string text) {
-  for (char& c : text) {
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
-  }
-  while (!text.empty() && text.back() == ' ') text.pop_back();
-  return text;
-}
+std::string oneLine(std::string text) { return text::oneLine(text); }
 
 std::string lowerExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();

@@ -43,7 +43,7 @@ struct GpuOptions {
   bool force_staging = false;
   /// On a CPU device (lavapipe), sets glibc's mmap threshold to 32 MiB and trim threshold to
   /// 1 GiB for the whole process: lavapipe allocates and frees multi-megabyte buffers per draw,
-  /// and with the defaults every draw faults its pages back in (about 5x slower draws). This
+  /// and with the defaults every draw faults its pages back in (README, "Performance"). This
   /// changes the allocator of the whole process, so it is off unless the program asks for it
   /// (the vkloc tool does).
   bool tune_allocator = false;

@@ -134,9 +134,8 @@ class GpuEdgeStages {
   /// call with setStageTimings(true) (and timestamp support); otherwise one entry,
   /// "submission (host)", the host wall time of its submissions.
   const std::vector<GpuStageTiming>& lastTimings() const;
-  /// Timestamps between stages, off by default: on lavapipe each one drains the queue (Castle-simu
-  /// frame keeping its reference, measured before the live stages were reshaped: 21.5 ms with
-  /// them, 17.7 without; `vkloc bench live` prints both for the live stages).
+  /// Timestamps between stages, off by default: on CPU drivers each one drains the queue and
+  /// slows the frame (README, "Performance").
   void setStageTimings(bool enabled);
 
   struct Impl;

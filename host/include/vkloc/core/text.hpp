@@ -58,6 +58,9 @@ std::string parseDouble(std::string_view token, double& out);
 /// Parses a decimal integer ('+' allowed) that fits in int64_t.
 std::string parseInt64(std::string_view token, int64_t& out);
 
+/// Parses a decimal unsigned integer (no sign) that fits in uint64_t.
+std::string parseUint64(std::string_view token, uint64_t& out);
+
 /// Parses a decimal number of seconds ("1305031102.175304", "-0.5", "1.3e9") into integer
 /// nanoseconds exactly, without floating point. The one rounding rule of vkloc: digits beyond
 /// 1 ns are rounded half away from zero (1.0000000005 s -> 1000000001 ns, -1.0000000005 s ->

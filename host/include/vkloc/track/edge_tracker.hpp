@@ -87,61 +87,46 @@ inline double tDistributionWeight(double r, double sigma, double nu) {
 EdgeNormalEquations accumulateEdgeNormalEquations(const std::vector<EdgePoint>& points, const Pose& T_camera_ref,
                                                   const LiveLevel& level, double sigma_px, double nu);
 
-/// Options of trackFrame.
+/// Options of trackFrame. Why the defaults are what they are (the sequences and frames they were
+/// measured on) is in the README, "Tracker defaults".
 struct EdgeTrackerOptions {
   double nu = 5.0;           ///< Degrees of freedom of the t-distribution weights.
   int scale_iterations = 5;  ///< Fixed-point iterations of the scale per GN iteration.
   int max_iterations = 30;   ///< Gauss-Newton iterations per pyramid level.
   /// First (coarsest) level of the plain coarse-to-fine pass; -1 = the live frame's coarsest.
-  /// Default 0: on city_hard (sun shadows, JPEG, damaged model) the 320x240 level 1 is biased
-  /// (texture inliers at the true pose 0.72 against 0.83 at level 0) and pulled frames 12 and 19
-  /// from their true poses to 0.3-1.1 m errors; level 0 alone keeps them within 6 mm. The wider
-  /// basin comes from the far-points-first hypothesis, which starts at far_first_coarsest_level.
+  /// The wider basin comes from the far-points-first hypothesis (far_first_coarsest_level).
   int coarsest_level = 0;
   int finest_level = 0;  ///< Last level used (0 = full resolution).
   /// Parallax-ordered second hypothesis: besides the plain coarse-to-fine pass from the guess,
   /// one that first aligns only the points whose depth is at least this quantile (0..1) of the
   /// level's point depths, then all points (0 = off). Near points move most when the camera
   /// translates and alias onto the wrong texture edges; far ones first pull the pose into the
-  /// basin. The pose with more finest-level inliers wins. city_easy, frame 1 from frame 0's true
-  /// pose (0.23 m, nearest surface 1.9 m): 365 mm error without, 0.4-3 mm with 0.3.
+  /// basin. The pose with more finest-level inliers wins.
   double far_first_depth_quantile = 0.3;
-  /// Coarsest level of the far-points-first hypothesis; -1 = coarsest_level. Default 1 (see
-  /// far_first_depth_quantile; 172 mm instead of 3 mm on that frame when it starts at level 0).
+  /// Coarsest level of the far-points-first hypothesis; -1 = coarsest_level.
   int far_first_coarsest_level = 1;
   /// Skip the far-points-first hypothesis when the plain pass already has at least this
-  /// fraction of all finest-level points as inliers (> 1 = never skip). Castle-simu (right
-  /// poses 0.88-0.95 of the points in view) then aligns once per frame.
+  /// fraction of all finest-level points as inliers (> 1 = never skip).
   double far_first_skip_inlier_ratio = 0.85;
   /// Stop a level when |delta| (m and rad combined) falls below this (10 um / 10 urad: 0.005 px
   /// at 1.4 m with fx = 700).
   double min_step = 1e-5;
   /// Stop a level when an accepted step lowers the robust cost by less than this fraction.
-  /// Measured (`vkloc bench track`, CPU): with 1e-5 and min_step 1e-5 instead of 1e-7 and no cost
-  /// test, align time on Castle-simu 3.3 -> 1.8 ms and room_hard 16 -> 10.4 ms at the same
-  /// accuracy (0.62 mm; 11.7 vs 12.2 mm mean); 1e-3 costs room_hard accuracy (17.5 mm).
   double min_cost_decrease = 1e-5;
   double initial_damping = 1e-4;     ///< Levenberg damping (relative to diag(H)) after a rejected step.
   double max_damping = 1e4;          ///< Give up a level when the damping exceeds this.
   double inlier_threshold_px = 1.5;  ///< A valid residual below this (finest level pixels) is an inlier.
-  /// Lost below this inliers / points projected into the image. Right poses measured 0.47-0.57
-  /// (room_hard: lighting, shadows, model holes), 0.67-0.85 (city_hard), 0.88-0.95 (castle).
-  double min_inlier_ratio = 0.4;
+  double min_inlier_ratio = 0.4;     ///< Lost below this inliers / points projected into the image.
   /// Lost below this (inlier_ratio - chance) / (1 - chance), chance = fraction of live pixels
-  /// within inlier_threshold_px of an edge (dense edge maps make any pose look good). Right
-  /// poses measured 0.31-0.45 on room_hard, 0.43-0.8 on city_hard.
+  /// within inlier_threshold_px of an edge (dense edge maps make any pose look good).
   double min_inlier_ratio_above_chance = 0.25;
   /// Lost when the RMS spread of the projected points about their centroid changes by more than
-  /// this factor from the reference view (a pose that shrinks the points onto a few edges; a
-  /// wrong minimum 25 degrees off measured 0.57, frame-to-frame tracking 0.99-1.04).
+  /// this factor from the reference view (a pose that shrinks the points onto a few edges).
   double max_spread_change = 1.5;
-  double min_visible_ratio = 0.5;  ///< Lost below this (points projected into the image) / (all points).
-  /// Lost above this mean inlier residual, finest level pixels. With sub-pixel edge lines right
-  /// poses measured 0.24-0.38 px (castle, box, demo city), up to 0.62 (city_hard) and 0.72
-  /// (room_hard); without edge lines (pixel-centre distances) ~0.1 px more.
-  double max_mean_residual_px = 0.8;
-  int min_points = 30;             ///< Lost with fewer points projected into the image.
-  double max_translation_m = 1e6;  ///< Lost when the correction of the guess exceeds this (m).
+  double min_visible_ratio = 0.5;     ///< Lost below this (points projected into the image) / (all points).
+  double max_mean_residual_px = 0.8;  ///< Lost above this mean inlier residual, finest level pixels.
+  int min_points = 30;                ///< Lost with fewer points projected into the image.
+  double max_translation_m = 1e6;     ///< Lost when the correction of the guess exceeds this (m).
 };
 
 /// Checks ranges of EdgeTrackerOptions; kInvalidArgument naming the field otherwise.
