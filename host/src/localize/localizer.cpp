@@ -151,7 +151,7 @@ struct Localizer::Impl {
   int64_t frame_index = -1;            ///< Frames given to localize since create.
   bool tracked_since_reset = false;    ///< A frame was tracked since create/reset.
   bool live_ready = false;             ///< The active backend holds the current image's live frame.
-  const Keyframe* uploaded = nullptr;  ///< Keyframe the backends hold (setKeyframe).
+  uint64_t uploaded_id = 0;            ///< Id of the keyframe the backends hold (setKeyframe; 0: none).
   // Worker mode: running means of a keyframe's making time and of a frame's time on the
   // caller's thread (ms), and the last frame interval (ns), for the request's lead.
   double keyframe_ms_mean = 0;
@@ -163,11 +163,11 @@ struct Localizer::Impl {
   /// Gives every backend the current keyframe's points when it changed.
   Status uploadKeyframe() {
     const Keyframe* current = keyframes->current().get();
-    if (current == uploaded || current == nullptr) return Status::success();
-    uploaded = nullptr;
+    if (current == nullptr || current->id == uploaded_id) return Status::success();
+    uploaded_id = 0;
     VKLOC_TRY_STATUS(cpu_backend->setKeyframe(current->reference));
     if (device_backend) VKLOC_TRY_STATUS(device_backend->setKeyframe(current->reference));
-    uploaded = current;
+    uploaded_id = current->id;
     return Status::success();
   }
 
@@ -330,7 +330,7 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
 void Localizer::reset(const Pose& T_world_camera) {
   Impl& m = *impl_;
   m.keyframes->reset();
-  m.uploaded = nullptr;
+  m.uploaded_id = 0;
   m.last_t_ns.reset();
   m.tracked_since_reset = false;
   m.motion->reset(T_world_camera);  // timestamps may start over

@@ -169,9 +169,17 @@ double estimateTDistributionScale(const std::vector<float>& residuals, double nu
   const double min_var = min_sigma_px * min_sigma_px;
   if (n == 0) return min_sigma_px;
   double var = std::max(sum / n, min_var);
+  // The terms first (independent: their divisions vectorise), then their sum in order (the
+  // same additions as one loop).
+  thread_local std::vector<double> terms;
+  terms.resize(n);
+  const double nu1 = nu + 1.0;
   for (int it = 0; it < iterations; ++it) {
+    const double* r2 = squares.data();
+    double* t = terms.data();
+    for (size_t i = 0; i < n; ++i) t[i] = r2[i] * nu1 / (nu + r2[i] / var);
     double acc = 0;
-    for (double r2 : squares) acc += r2 * (nu + 1.0) / (nu + r2 / var);
+    for (size_t i = 0; i < n; ++i) acc += t[i];
     var = std::max(acc / n, min_var);
   }
   return std::sqrt(var);
