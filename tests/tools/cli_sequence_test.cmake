@@ -38,6 +38,21 @@ if(NOT rc EQUAL 1 OR NOT err MATCHES "bad.txt:2" OR NOT EXISTS ${WORK}/eval.json
   message(FATAL_ERROR "malformed estimate: rc ${rc}, stderr '${err}'")
 endif()
 
+# Devices and pipes are written directly: /dev/null stays a device, a full device is an error
+# (the report is not "written" into a regular file replacing /dev/full).
+run_ok("eval to /dev/null" eval --estimate ${WORK}/room/groundtruth.txt --sequence ${WORK}/room --json /dev/null)
+if(EXISTS /dev/full)
+  execute_process(COMMAND ${VKLOC} eval --estimate ${WORK}/room/groundtruth.txt --sequence ${WORK}/room
+                  --json /dev/full RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 1 OR NOT err MATCHES "/dev/full")
+    message(FATAL_ERROR "eval --json /dev/full: expected a one-line error, got ${rc}: '${err}'")
+  endif()
+endif()
+execute_process(COMMAND stat -c %F /dev/null /dev/full OUTPUT_VARIABLE kinds)
+if(kinds MATCHES "regular")
+  message(FATAL_ERROR "a device node was replaced by a regular file: ${kinds}")
+endif()
+
 # ViSP Castle-simu (Debian visp-images-data) converted into a sequence.
 set(castle /usr/share/visp-images-data/ViSP-images/mbt-depth/Castle-simu)
 if(EXISTS ${castle})
