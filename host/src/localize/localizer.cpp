@@ -147,11 +147,11 @@ struct Localizer::Impl {
   std::string device_name;  ///< The accelerator's, or "" without one.
   std::string backend_reason;
 
-  std::optional<int64_t> last_t_ns;    ///< Last frame given to localize.
-  int64_t frame_index = -1;            ///< Frames given to localize since create.
-  bool tracked_since_reset = false;    ///< A frame was tracked since create/reset.
-  bool live_ready = false;             ///< The active backend holds the current image's live frame.
-  uint64_t uploaded_id = 0;            ///< Id of the keyframe the backends hold (setKeyframe; 0: none).
+  std::optional<int64_t> last_t_ns;  ///< Last frame given to localize.
+  int64_t frame_index = -1;          ///< Frames given to localize since create.
+  bool tracked_since_reset = false;  ///< A frame was tracked since create/reset.
+  bool live_ready = false;           ///< The active backend holds the current image's live frame.
+  uint64_t uploaded_id = 0;          ///< Id of the keyframe the backends hold (setKeyframe; 0: none).
   // Worker mode: running means of a keyframe's making time and of a frame's time on the
   // caller's thread (ms), and the last frame interval (ns), for the request's lead.
   double keyframe_ms_mean = 0;
