@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "vkloc/core/camera.hpp"
+#include "vkloc/core/clock.hpp"
 #include "vkloc/core/pose.hpp"
 #include "vkloc/engine/gpu.hpp"
 #include "vkloc/localize/localizer.hpp"
@@ -73,11 +74,6 @@ struct DeviceArgs {
 
 /// True when the name is a built-in demo model.
 bool isDemoModel(const std::string& name);
-
-/// Milliseconds since `t0`.
-inline double msSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 /// Writes rgba.png, gray.png, depth_mm.png, depth.tiff (and normals.png) for one render,
 /// named with `stem` in `dir`. Returns the paths written.

@@ -12,6 +12,7 @@
 #include "context.hpp"
 #include "edge_layout.h"
 #include "shader_registry.hpp"
+#include "vkloc/core/clock.hpp"
 #include "vkloc/engine/gpu_edges.hpp"
 
 namespace vkloc {
@@ -559,9 +560,9 @@ static void addTiming(std::vector<GpuStageTiming>& timings, const std::string& s
 Status GpuEdgeStages::Impl::submit() {
   hostBarrier(cmd);
   VKLOC_VK(vkEndCommandBuffer(cmd));
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = SteadyClock::now();
   VKLOC_TRY_STATUS(ctx->submitAndWait(cmd, fence.get()));
-  const double host_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const double host_ms = msSince(t0);
   if (query_pool && marks.size() > 1) {
     std::vector<uint64_t> ticks(marks.size());
     VKLOC_VK(vkGetQueryPoolResults(device, query_pool.get(), 0, static_cast<uint32_t>(marks.size()),

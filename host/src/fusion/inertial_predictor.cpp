@@ -4,12 +4,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "vkloc/core/numeric.hpp"
 #include "vkloc/fusion/imu_integration.hpp"
 
 namespace vkloc {
 namespace {
-
-bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
 
 double seconds(int64_t dt_ns) { return static_cast<double>(dt_ns) * 1e-9; }
 

@@ -2,15 +2,10 @@
 
 #include <cmath>
 
+#include "vkloc/core/numeric.hpp"
 #include "vkloc/core/se3.hpp"
 
 namespace vkloc {
-namespace {
-
-bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
-
-}  // namespace
-
 Status validateInitializerOptions(const InitializerOptions& o) {
   if (o.refinements < 0 || o.refinements > 100) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: init_refinements must be in 0..100");

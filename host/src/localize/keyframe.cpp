@@ -5,14 +5,11 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
+
+#include "vkloc/core/clock.hpp"
 
 namespace vkloc {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 /// Median of the positive depths of a render (metres); 0 when nothing is seen.
 double medianDepth(const ImageF32& depth) {
@@ -38,11 +35,11 @@ KeyframeMaker::KeyframeMaker(std::unique_ptr<Renderer> renderer, const PinholeCa
 Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeRequest& request) {
   auto keyframe = std::make_shared<Keyframe>();
   keyframe->request = request;
-  auto t0 = Clock::now();
+  auto t0 = SteadyClock::now();
   Result<RenderOutput> view = renderer_->render(camera_, request.T_world_ref, render_);
   if (!view.ok()) return view.error();
   keyframe->render_ms = msSince(t0);
-  t0 = Clock::now();
+  t0 = SteadyClock::now();
   keyframe->scene_depth_m = medianDepth(view->depth);
   // The render's depth and normals are handed to the reference stage (no 5 MB copy).
   Result<EdgeReference> reference = buildEdgeReference(std::move(*view), camera_, request.T_world_ref, reference_);

@@ -4,20 +4,15 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 
+#include "vkloc/core/clock.hpp"
+#include "vkloc/core/numeric.hpp"
 #include "vkloc/render/cpu_renderer.hpp"
 
 namespace vkloc {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-
-bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
 
 InitializerOptions initializerOptions(const LocalizerOptions& o) {
   InitializerOptions i;
@@ -193,13 +188,13 @@ struct Localizer::Impl {
       lost.T_camera_ref = start.inverse() * reference.T_world_ref;
       return lost;
     }
-    auto t0 = Clock::now();
+    auto t0 = SteadyClock::now();
     if (!ready) {
       VKLOC_TRY_STATUS(backend.setLiveImage(gray));
       ready = true;
       out.live_ms += msSince(t0);
     }
-    t0 = Clock::now();
+    t0 = SteadyClock::now();
     std::optional<EdgeReference> slow;
     const std::optional<Pose> last_pose = motion->lastPose();
     if (options.max_point_motion_px > 0 && last_pose && tracked_since_reset) {
@@ -354,7 +349,7 @@ std::string Localizer::backendSummary() const {
 
 Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray,
                                                const std::optional<Pose>& T_world_camera_guess) {
-  const auto t_start = Clock::now();
+  const auto t_start = SteadyClock::now();
   Impl& m = *impl_;
   if (gray.channels != 1 || gray.width != m.camera.width || gray.height != m.camera.height ||
       gray.data.size() != static_cast<size_t>(gray.width) * gray.height) {

@@ -2,12 +2,11 @@
 
 #include <cmath>
 
+#include "vkloc/core/numeric.hpp"
 #include "vkloc/core/se3.hpp"
 
 namespace vkloc {
 namespace {
-
-bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
 
 double rotationDeg(const Eigen::Matrix3d& R) { return logSO3(R).norm() * 180.0 / M_PI; }
 

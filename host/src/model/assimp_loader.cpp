@@ -18,6 +18,7 @@
 #include <string_view>
 
 #include "model/model_internal.hpp"
+#include "vkloc/core/text.hpp"
 
 // Debian's assimp is built with its internal assertions enabled, and their default handler
 // aborts the process; the hook that replaces it (setAiAssertHandler) is not exported. The
@@ -35,19 +36,6 @@ namespace {
 namespace fs = std::filesystem;
 
 bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
-// Splits a line into whitespace-separated tokens.
-std::vector<std::string_view> tokens(std::string_view line) {
-  std::vector<std::string_view> out;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && isSpace(line[i])) ++i;
-    const size_t start = i;
-    while (i < line.size() && !isSpace(line[i])) ++i;
-    if (i > start) out.push_back(line.substr(start, i - start));
-  }
-  return out;
-}
 
 // `text` for quoting in a message: bytes outside printable ASCII become '?', at most
 // `max_size` kept.
@@ -131,7 +119,7 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes, std:
   // Totals first: OBJ readers accept references to elements defined later in the file.
   uint64_t total[3] = {0, 0, 0};  // v, vt, vn
   forEachObjLine(text, [&](size_t, std::string_view line) {
-    const auto t = tokens(line);
+    const auto t = text::splitFields(line);
     const int kind = t.empty() ? -1 : objStatement(t[0]);
     if (kind >= 0 && kind < 3) ++total[kind];
     return true;
@@ -143,7 +131,7 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes, std:
   Status status;
   const fs::path dir = fs::path(path).parent_path();
   forEachObjLine(text, [&](size_t line_number, std::string_view line) {
-    const auto t = tokens(line);
+    const auto t = text::splitFields(line);
     const int statement = t.empty() ? -1 : objStatement(t[0]);
     if (statement == -2) {
       status = fileError(ErrorCode::kMalformedInput, path,
@@ -370,7 +358,7 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
   size_t data_offset = 0;
   Status status;
   forEachLine(text, [&](size_t line_number, std::string_view line) {
-    const auto t = tokens(line);
+    const auto t = text::splitFields(line);
     const auto bad = [&](const std::string& what) {
       status = fileError(ErrorCode::kMalformedInput, path, fmt::format("PLY header line {}: {}", line_number, what));
       return false;

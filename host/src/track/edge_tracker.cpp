@@ -9,13 +9,12 @@
 #include <cmath>
 #include <optional>
 
+#include "vkloc/core/numeric.hpp"
 namespace vkloc {
 namespace {
 
 /// Lower bound of the t-distribution scale, pixels (default of estimateTDistributionScale).
 constexpr double kMinSigmaPx = 0.05;
-
-bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
 
 /// sum over all points of log(1 + r^2 / (nu sigma^2)), the negative log-likelihood of the
 /// t-distribution up to constants; points that do not contribute count as truncated.

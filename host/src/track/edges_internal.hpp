@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "vkloc/core/image.hpp"
+#include "vkloc/core/numeric.hpp"
 #include "vkloc/track/edge_detector.hpp"
 
 namespace vkloc::track_detail {
@@ -15,8 +16,6 @@ namespace vkloc::track_detail {
 inline cv::Mat wrap(const ImageF32& image) {
   return cv::Mat(image.height, image.width, CV_32FC(image.channels), const_cast<float*>(image.data.data()));
 }
-
-inline bool finiteIn(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
 
 /// Sobel / 8 gradients and magnitude of the image edges were detected on, and the detector's
 /// other working buffers (kept between calls so that repeated frames do not allocate).
