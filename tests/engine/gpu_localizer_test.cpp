@@ -83,6 +83,32 @@ TEST_F(LocalizerTest, CpuAndVulkanBackendsAgreeOnARenderedView) {
   EXPECT_LT(rotationErrorDeg(poses[0], poses[1]), 0.05);
 }
 
+// kAuto with calibrate_backend: the first frame runs both backends and keeps the faster; the
+// frames after it track on that one alone (keyframes in both modes).
+TEST_F(LocalizerTest, CalibratedAutoBackendPicksOneAndKeepsTracking) {
+  for (KeyframeThreading threading : {KeyframeThreading::kSynchronous, KeyframeThreading::kWorkerThread}) {
+    LocalizerOptions options;
+    options.backend = LocalizerBackend::kAuto;
+    options.calibrate_backend = true;
+    options.keyframe_threading = threading;
+    auto localizer = Localizer::create(model_, vga(), options, accelerator());
+    ASSERT_TRUE(localizer.ok()) << localizer.error().message;
+    EXPECT_NE((*localizer)->backendSummary().find("not yet calibrated"), std::string::npos)
+        << (*localizer)->backendSummary();
+    (*localizer)->reset(perturbed(truth_));
+    for (int frame = 0; frame < 4; ++frame) {
+      auto r = (*localizer)->localize(int64_t{frame} * 50'000'000, gray_);
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      EXPECT_EQ(r->state, TrackingState::kTracking) << "frame " << frame;
+      EXPECT_LT(translationError(r->T_world_camera, truth_), 5e-3) << "frame " << frame;
+    }
+    const std::string summary = (*localizer)->backendSummary();
+    EXPECT_NE(summary.find("calibrated on the first frame"), std::string::npos) << summary;
+    EXPECT_TRUE(summary.find("on CPU") != std::string::npos || summary.find("on Vulkan") != std::string::npos)
+        << summary;
+  }
+}
+
 TEST_F(LocalizerTest, WhenNeededKeepsTheReferenceForAStillCamera) {
   LocalizerOptions options;
   options.backend = LocalizerBackend::kCpu;

@@ -135,6 +135,7 @@ struct Localizer::Impl {
   std::unique_ptr<KeyframeManager> keyframes;
   std::unique_ptr<MotionPrior> motion;
   Initializer initializer{InitializerOptions{}};
+  /// The backends frames may be tracked on: both only until the first-frame calibration.
   std::unique_ptr<EdgeTrackingBackend> cpu_backend;
   std::unique_ptr<EdgeTrackingBackend> device_backend;  ///< When the device runs (or may run) the edge stages.
   EdgeTrackingBackend* active = nullptr;                ///< The backend frames are tracked on.
@@ -160,8 +161,9 @@ struct Localizer::Impl {
     const Keyframe* current = keyframes->current().get();
     if (current == nullptr || current->id == uploaded_id) return Status::success();
     uploaded_id = 0;
-    VKLOC_TRY_STATUS(cpu_backend->setKeyframe(current->reference));
-    if (device_backend) VKLOC_TRY_STATUS(device_backend->setKeyframe(current->reference));
+    for (EdgeTrackingBackend* backend : {cpu_backend.get(), device_backend.get()}) {
+      if (backend) VKLOC_TRY_STATUS(backend->setKeyframe(current->reference));
+    }
     uploaded_id = current->id;
     return Status::success();
   }
@@ -220,7 +222,14 @@ struct Localizer::Impl {
         best[b] = scratch.live_ms + scratch.align_ms;
       }
     }
-    active = best[1] < best[0] ? device_backend.get() : cpu_backend.get();
+    // The other backend is released: it would only take keyframe uploads (device memory).
+    if (best[1] < best[0]) {
+      active = device_backend.get();
+      cpu_backend.reset();
+    } else {
+      active = cpu_backend.get();
+      device_backend.reset();
+    }
     backend_reason = fmt::format("calibrated on the first frame: CPU {:.1f} ms, device {:.1f} ms", best[0], best[1]);
     return Status::success();
   }
@@ -284,9 +293,6 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
   auto maker = std::make_unique<KeyframeMaker>(std::move(renderer), camera, impl->options.render, keyframe_edges);
   impl->keyframes = std::make_unique<KeyframeManager>(std::move(maker), keyframeOptions(options));
 
-  auto cpu = CpuEdgeTrackingBackend::create(camera, impl->options.live);
-  if (!cpu.ok()) return cpu.error();
-  impl->cpu_backend = std::move(cpu).value();
   bool on_device = false;
   switch (options.backend) {
     case LocalizerBackend::kCpu:
@@ -313,7 +319,12 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
       }
       break;
   }
-  if (accelerator && (on_device || impl->calibration_pending)) {
+  if (!on_device || impl->calibration_pending) {
+    auto cpu = CpuEdgeTrackingBackend::create(camera, impl->options.live);
+    if (!cpu.ok()) return cpu.error();
+    impl->cpu_backend = std::move(cpu).value();
+  }
+  if (on_device || impl->calibration_pending) {
     auto device = accelerator->createEdgeBackend(camera, impl->options.live);
     if (!device.ok()) return device.error();
     impl->device_backend = std::move(device).value();
