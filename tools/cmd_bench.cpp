@@ -234,8 +234,7 @@ void runTrackBench(const TrackBenchArgs& a) {
           const auto it = gt.find(t_ns);
           if (it != gt.end() && r.state == TrackingState::kTracking) {
             run.t_err_mm.push_back((r.T_world_camera.translation() - it->second.translation()).norm() * 1e3);
-            run.r_err_deg.push_back(logSO3(it->second.linear().transpose() * r.T_world_camera.linear()).norm() * 180.0 /
-                                    M_PI);
+            run.r_err_deg.push_back(rotationAngleDeg(it->second.linear().transpose() * r.T_world_camera.linear()));
           }
         }
         if (pass >= 0) run.wall_s += msSince(t_pass) * 1e-3;

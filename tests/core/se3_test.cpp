@@ -70,6 +70,14 @@ TEST(Se3, LogSO3InvertsExpIncludingNearPi) {
   }
 }
 
+TEST(Se3, RotationAngleDegIsTheAngleOfTheAxisAngle) {
+  for (const Eigen::Vector3d& phi : testRotations()) {
+    const double expected = phi.norm() * 180.0 / kPi;  // testRotations are within [0, pi]
+    EXPECT_NEAR(rotationAngleDeg(angleAxis(phi)), expected, 1e-9) << phi.transpose();
+  }
+  EXPECT_EQ(rotationAngleDeg(Eigen::Matrix3d::Identity()), 0.0);
+}
+
 TEST(Se3, ExpLogRoundTripSE3) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> t(-5.0, 5.0);

@@ -67,6 +67,8 @@ Eigen::Vector3d logSO3(const Eigen::Matrix3d& R) {
   return (theta / s) * v;
 }
 
+double rotationAngleDeg(const Eigen::Matrix3d& R) { return logSO3(R).norm() * 180.0 / M_PI; }
+
 Eigen::Matrix3d leftJacobianSO3(const Eigen::Vector3d& phi) {
   const double theta2 = phi.squaredNorm();
   const double theta = std::sqrt(theta2);

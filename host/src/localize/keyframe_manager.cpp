@@ -7,12 +7,6 @@
 #include "vkloc/core/se3.hpp"
 
 namespace vkloc {
-namespace {
-
-double rotationDeg(const Eigen::Matrix3d& R) { return logSO3(R).norm() * 180.0 / M_PI; }
-
-}  // namespace
-
 Result<RerenderPolicy> parseRerenderPolicy(const std::string& name) {
   if (name == "every-frame") return RerenderPolicy::kEveryFrame;
   if (name == "when-needed") return RerenderPolicy::kWhenNeeded;
@@ -57,7 +51,7 @@ bool KeyframeManager::needsKeyframe(const Pose& T_world_camera) const {
   const Pose T_ref_camera = current_->reference.T_world_ref.inverse() * T_world_camera;
   const double depth = current_->scene_depth_m > 0 ? current_->scene_depth_m : 1.0;
   if (T_ref_camera.translation().norm() > r.max_translation_depth_ratio * depth) return true;
-  return rotationDeg(T_ref_camera.linear()) > r.max_rotation_deg;
+  return rotationAngleDeg(T_ref_camera.linear()) > r.max_rotation_deg;
 }
 
 void KeyframeManager::setCurrent(std::shared_ptr<const Keyframe> keyframe) {

@@ -6,12 +6,6 @@
 #include "vkloc/core/se3.hpp"
 
 namespace vkloc {
-namespace {
-
-double rotationDeg(const Eigen::Matrix3d& R) { return logSO3(R).norm() * 180.0 / M_PI; }
-
-}  // namespace
-
 Status validateInertialAiding(const InertialAiding& ia) {
   if (!isValidPose(ia.T_body_camera)) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: inertial.T_body_camera is not a finite rigid transform");
@@ -111,7 +105,7 @@ bool InertialPrior::consistent(const MotionPrediction& prediction, const Pose& T
   const double depth = scene_depth_m > 0 ? scene_depth_m : 1.0;
   const double gate_m =
       aiding_.gate_depth_ratio * depth + aiding_.gate_sigmas * std::hypot(prediction.sigma_m, prediction.fit_rms_m);
-  return !(d.translation().norm() > gate_m || rotationDeg(d.linear()) > aiding_.gate_rotation_deg);
+  return !(d.translation().norm() > gate_m || rotationAngleDeg(d.linear()) > aiding_.gate_rotation_deg);
 }
 
 void InertialPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) {

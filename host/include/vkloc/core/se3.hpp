@@ -40,6 +40,9 @@ Eigen::Matrix3d expSO3(const Eigen::Vector3d& phi);
 /// method), so it stays accurate near identity and near pi. R must be a rotation matrix.
 Eigen::Vector3d logSO3(const Eigen::Matrix3d& R);
 
+/// Angle of the rotation R in degrees, [0, 180] (|logSO3(R)|). R must be a rotation matrix.
+double rotationAngleDeg(const Eigen::Matrix3d& R);
+
 /// Left Jacobian of SO(3): expSO3(phi + d) ~= expSO3(leftJacobianSO3(phi) d) expSO3(phi) for
 /// small d. Also the V matrix of expSE3.
 Eigen::Matrix3d leftJacobianSO3(const Eigen::Vector3d& phi);
