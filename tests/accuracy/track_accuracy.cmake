@@ -7,13 +7,7 @@
 #                  translation error <= 0.5 % of the median scene depth, median rotation <= 0.3 deg
 # Exit code 77 (skip) when the ViSP data is not installed.
 cmake_minimum_required(VERSION 3.22)
-
-function(run what)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
 
 function(json_number var file key)
   file(READ ${file} text)

@@ -4,14 +4,7 @@
 # installed `vkloc` tool. Arguments: -DBUILD=<build tree> -DSOURCE=<consumer folder>
 # -DWORK=<scratch folder outside the source tree> [-DGENERATOR=Ninja].
 cmake_minimum_required(VERSION 3.22)
-
-function(run what)
-  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
-  endif()
-  set(out "${out}" PARENT_SCOPE)
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
 
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})

@@ -1,12 +1,6 @@
 # End-to-end test of `vkloc simulate`, `vkloc import visp` and `vkloc eval` through the CLI.
+include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
 file(REMOVE_RECURSE ${WORK})
-function(run_ok what)
-  execute_process(COMMAND ${VKLOC} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "vkloc ${what} failed (${rc}): ${out} ${err}")
-  endif()
-  set(out "${out}" PARENT_SCOPE)
-endfunction()
 
 # A small simulated sequence with every appearance change and model damage on.
 run_ok("simulate room hard" simulate room hard --frames 3 --intrinsics 100,100,63.5,47.5,128,96 --out ${WORK}/room)

@@ -1,21 +1,8 @@
 # End-to-end test of `vkloc track`: a short simulated sequence, outputs, and errors that keep
 # what was already written. Arguments: -DVKLOC=path -DWORK=dir.
 cmake_minimum_required(VERSION 3.22)
+include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
 file(REMOVE_RECURSE ${WORK})
-
-function(run_ok what)
-  execute_process(COMMAND ${VKLOC} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "${what} failed (${rc}):\n${out}\n${err}")
-  endif()
-  set(out "${out}" PARENT_SCOPE)
-endfunction()
-function(run_fails what pattern)
-  execute_process(COMMAND ${VKLOC} ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-  if(rc EQUAL 0 OR NOT err MATCHES "${pattern}")
-    message(FATAL_ERROR "${what}: expected a failure matching '${pattern}', got ${rc}:\n${out}\n${err}")
-  endif()
-endfunction()
 
 set(seq ${WORK}/room)
 run_ok("simulate" simulate room easy --frames 6 --out ${seq} --no-imu --no-priors)
