@@ -6,8 +6,11 @@
 // index advances by the stride without a division per sample (lavapipe divides lane by lane).
 // The last workgroup to finish a pass (counted in hist_done[pass]) then does the select step:
 // finds the bucket holding the wanted rank, appends its bits to the prefix, clears the
-// histogram, and after pass 2 derives the thresholds
-// high = max(high_factor * s, min_high_gradient), low = low_ratio * high. One dispatch per pass
+// histogram. Two selects run in turn, 3 passes each (pc.step 0..5): steps 0-2 select the noise
+// quantile q (rank pc.pad0, skipped when the noise floor is off: ctl.noise stays 0) and store
+// ctl.noise = robust.x * q (robust.x = noise_sigmas / Rayleigh factor, EdgeDetectorOptions);
+// steps 3-5 select the contrast quantile s (rank pc.rank) and derive the thresholds
+// high = max(high_factor * s, min_high_gradient, ctl.noise), low = low_ratio * high. One dispatch per pass
 // instead of a histogram and a one-workgroup select dispatch (which leaves all but one thread
 // of a CPU driver idle).
 #extension GL_GOOGLE_include_directive : require
@@ -33,7 +36,8 @@ void selectStep(uint nbits) {
   const uint nb = 1u << nbits;
   const uint per = (nb + 255u) / 256u;
   const uint first = t * per;
-  const uint k = pc.step == 0 ? pc.rank : ctl.remaining;
+  const uint sub = uint(pc.step) % 3u;
+  const uint k = sub == 0u ? (pc.step < 3 ? pc.pad0 : pc.rank) : ctl.remaining;
   uint local_sum = 0u;
   for (uint i = 0u; i < per; ++i) {
     if (first + i < nb) local_sum += hist[first + i];
@@ -68,12 +72,13 @@ void selectStep(uint nbits) {
         below += c;
       }
     }
-    uint prefix = pc.step == 0 ? selected : ((ctl.prefix << nbits) | selected);
+    uint prefix = sub == 0u ? selected : ((ctl.prefix << nbits) | selected);
     ctl.prefix = prefix;
     ctl.remaining = k - below;
-    if (pc.step == 2) {
+    if (pc.step == 2) ctl.noise = pc.robust.x * uintBitsToFloat(prefix);
+    if (pc.step == 5) {
       float s = uintBitsToFloat(prefix);
-      float high = max(pc.high_factor * s, pc.min_high_gradient);
+      float high = max(max(pc.high_factor * s, pc.min_high_gradient), ctl.noise);
       ctl.contrast = s;
       ctl.high = high;
       ctl.low = pc.low_ratio * high;
@@ -87,11 +92,12 @@ void selectStep(uint nbits) {
 void main() {
   for (uint b = gl_LocalInvocationIndex; b < EDGE_HIST_BINS; b += 256u) bins[b] = 0u;
   barrier();
-  uint shift = pc.step == 0 ? 20u : (pc.step == 1 ? 9u : 0u);
-  uint nbits = pc.step == 2 ? 9u : 11u;
+  const uint sub = uint(pc.step) % 3u;
+  uint shift = sub == 0u ? 20u : (sub == 1u ? 9u : 0u);
+  uint nbits = sub == 2u ? 9u : 11u;
   uint mask = (1u << nbits) - 1u;
   uint high_shift = shift + nbits;
-  uint prefix = ctl.prefix;
+  uint prefix = sub == 0u ? 0u : ctl.prefix;  // a new select starts from no prefix
   uint sw = uint(pc.width + 1) / 2u;
   uint sh = uint(pc.height + 1) / 2u;
   uint stride = 256u * pc.group_count;

@@ -29,8 +29,8 @@ static_assert(offsetof(EdgePush, intrinsics) == 96);
 static_assert(offsetof(EdgePush, robust) == 112);
 static_assert(offsetof(EdgeControl, candidate_count) == 20);
 static_assert(offsetof(EdgeControl, line_span_count) == 28);
-static_assert(offsetof(EdgeControl, changes) == 48);
-static_assert(sizeof(EdgeControl) == 48 + 4 * EDGE_MAX_HYSTERESIS_PASSES);
+static_assert(offsetof(EdgeControl, changes) == 64);
+static_assert(sizeof(EdgeControl) == 64 + 4 * EDGE_MAX_HYSTERESIS_PASSES);
 static_assert(sizeof(EdgePoint) == 16);
 static_assert(static_cast<float>(EDGE_LINE_RADIUS_PX) == kEdgeLineRadiusPx);
 
@@ -625,7 +625,15 @@ void GpuEdgeStages::Impl::recordFront(int level) {
   const uint64_t n = static_cast<uint64_t>((push.width + 1) / 2) * ((push.height + 1) / 2);
   push.rank = static_cast<uint32_t>(std::min<uint64_t>(
       n - 1, static_cast<uint64_t>(options.detector.contrast_percentile * static_cast<double>(n - 1))));
-  for (int pass = 0; pass < 3; ++pass) {
+  const bool noise_floor = options.detector.noise_sigmas > 0.0 && push.rank > 0;
+  if (noise_floor) {
+    // Rank of the noise quantile: as detectEdges, at most one below the contrast's.
+    push.pad0 = static_cast<uint32_t>(std::min<uint64_t>(
+        push.rank - 1, static_cast<uint64_t>(options.detector.noise_quantile * static_cast<double>(n - 1))));
+    push.robust[0] =
+        static_cast<float>(options.detector.noise_sigmas / rayleighQuantileFactor(options.detector.noise_quantile));
+  }
+  for (int pass = noise_floor ? 0 : 3; pass < 6; ++pass) {
     push.step = pass;
     EdgePush hist_push = push;
     hist_push.group_count = wide_groups;

@@ -68,12 +68,13 @@ struct EdgePush {
   VKLOC_UINT(rank);                // Rank of the contrast quantile among the magnitude samples.
   VKLOC_UINT(point_count);         // Number of reference points.
   VKLOC_UINT(group_count);         // Workgroups of a grid-stride dispatch.
-  VKLOC_UINT(pad0);
-  VKLOC_VEC4(pose_row0);  // T_camera_ref as rows [R | t], t in metres.
+  VKLOC_UINT(pad0);                // edge_hist: rank of the noise quantile among the magnitude samples.
+  VKLOC_VEC4(pose_row0);           // T_camera_ref as rows [R | t], t in metres.
   VKLOC_VEC4(pose_row1);
   VKLOC_VEC4(pose_row2);
   VKLOC_VEC4(intrinsics);  // fx, fy, cx, cy of this level, pixels.
-  VKLOC_VEC4(robust);      // sigma (pixels), nu, minimum sigma (pixels), 1 = sigma from CONTROL.sigma_px.
+  VKLOC_VEC4(robust);      // sigma (pixels), nu, minimum sigma (pixels), 1 = sigma from CONTROL.sigma_px;
+                           // edge_hist: x = noise floor per unit of the noise quantile.
 };
 
 // Per-level control block written by the shaders.
@@ -86,7 +87,8 @@ struct EdgeControl {
   VKLOC_UINT(candidate_count);  // Weak candidates appended by NMS.
   VKLOC_FLOAT(sigma_px);        // t-distribution scale of the last residuals (edge_scale.comp), pixels.
   VKLOC_UINT(line_span_count);  // Near-edge row spans appended by edt_rows.comp (EDGE_LINE_SPAN px each).
-  VKLOC_UINT(hist_done[4]);     // Radix select: workgroups finished per histogram pass (3 used).
+  VKLOC_FLOAT(noise);           // Noise floor of the high threshold (edge_hist steps 0-2), gray levels per pixel.
+  VKLOC_UINT(hist_done[7]);     // Radix select: workgroups finished per histogram pass (6 used).
   VKLOC_UINT(changes[EDGE_MAX_HYSTERESIS_PASSES]);  // Pixels promoted per hysteresis pass slot.
 };
 

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "support/analytic_scenes.hpp"
+#include "vkloc/core/random.hpp"
 #include "vkloc/render/cpu_renderer.hpp"
 #include "vkloc/render/renderer.hpp"
 #include "vkloc/track/reference_edges.hpp"
@@ -212,6 +213,49 @@ TEST(EdgeDetector, EdgesSurviveExposureAndGammaChanges) {
   auto fixed_half = detectEdges(quantised(half), fixed);
   ASSERT_TRUE(fixed_base.ok() && fixed_half.ok());
   EXPECT_LT(keptFraction(*fixed_base, *fixed_half), 0.95);
+}
+
+// A plain wall under sensor noise: the contrast quantile alone lies inside the noise and turns it
+// into edges; the noise floor keeps the wall empty and still finds a real step in the same noise.
+TEST(EdgeDetector, NoiseFloorKeepsPlainNoisyWallsEmptyAndRealStepsFound) {
+  const int w = 320, h = 240;
+  Xoshiro256 rng(7);
+  ImageF32 wall(w, h, 1), step(w, h, 1);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const float noise = static_cast<float>(3.0 * rng.gaussian());  // 3 gray levels, 1 sigma
+      wall.at(x, y) = 128.0f + noise;
+      step.at(x, y) = (x >= w / 2 ? 158.0f : 128.0f) + noise;  // a 30-level step
+    }
+  }
+  auto edgeFraction = [&](const ImageU8& e) {
+    int n = 0;
+    for (uint8_t v : e.data) n += v != 0;
+    return static_cast<double>(n) / (w * h);
+  };
+  EdgeDetectorOptions no_floor;
+  no_floor.noise_sigmas = 0.0;
+  auto noisy = detectEdges(wall, no_floor);
+  auto floored = detectEdges(wall);
+  ASSERT_TRUE(noisy.ok() && floored.ok());
+  EXPECT_GT(edgeFraction(*noisy), 0.03) << "without the floor, noise becomes edges";
+  EXPECT_LT(edgeFraction(*floored), 0.001) << "with it, a plain wall has (almost) none";
+  auto with_step = detectEdges(step);
+  ASSERT_TRUE(with_step.ok());
+  int on_step = 0;
+  for (int y = 2; y < h - 2; ++y) on_step += with_step->at(w / 2 - 1, y) != 0 || with_step->at(w / 2, y) != 0;
+  EXPECT_GE(on_step, (h - 4) * 95 / 100) << "the step stays an edge along its whole length";
+  EXPECT_LT(edgeFraction(*with_step), 3.0 * h / (w * h)) << "and little else is";
+  // The floor scales with the image (a gain multiplies noise and step alike).
+  ImageF32 bright = step;
+  for (float& v : bright.data) v *= 1.5f;
+  auto with_gain = detectEdges(bright);
+  ASSERT_TRUE(with_gain.ok());
+  EXPECT_NEAR(edgeFraction(*with_gain), edgeFraction(*with_step), 0.1 * edgeFraction(*with_step));
+  EdgeDetectorOptions bad;
+  bad.noise_quantile = 0.95;
+  EXPECT_FALSE(detectEdges(wall, bad).ok());
+  EXPECT_NEAR(rayleighQuantileFactor(0.5), std::sqrt(2.0 * std::log(2.0)), 1e-12);
 }
 
 TEST(EdgeDetector, IdealStepGivesSymmetricTwoPixelEdge) {

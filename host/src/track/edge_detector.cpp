@@ -25,6 +25,12 @@ Status validateEdgeDetectorOptions(const EdgeDetectorOptions& o) {
   if (!finiteIn(o.low_ratio, 0.0, 1.0)) {
     return makeError(ErrorCode::kInvalidArgument, "edge detector: low_ratio must be in 0..1");
   }
+  if (!finiteIn(o.noise_quantile, 0.01, 0.9)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge detector: noise_quantile must be in 0.01..0.9");
+  }
+  if (!finiteIn(o.noise_sigmas, 0.0, 100.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "edge detector: noise_sigmas must be in 0..100");
+  }
   if (!finiteIn(o.min_high_gradient, 0.0, 1e9)) {
     return makeError(ErrorCode::kInvalidArgument, "edge detector: min_high_gradient must be >= 0 and finite");
   }
@@ -37,6 +43,8 @@ Result<ImageU8> detectEdges(const ImageF32& gray, const EdgeDetectorOptions& opt
   VKLOC_TRY_STATUS(detectEdgesImpl(gray, options, scratch, edges));
   return edges;
 }
+
+double rayleighQuantileFactor(double quantile) { return std::sqrt(-2.0 * std::log(1.0 - quantile)); }
 
 namespace track_detail {
 
@@ -67,7 +75,16 @@ Status detectEdgesImpl(const ImageF32& gray, const EdgeDetectorOptions& options,
   const size_t k = std::min(sample.size() - 1, static_cast<size_t>(options.contrast_percentile * (sample.size() - 1)));
   std::nth_element(sample.begin(), sample.begin() + static_cast<std::ptrdiff_t>(k), sample.end());
   const double contrast = sample[k];
-  const float high = static_cast<float>(std::max(options.high_factor * contrast, options.min_high_gradient));
+  double noise_floor = 0.0;
+  if (options.noise_sigmas > 0.0 && k > 0) {
+    // The noise quantile lies below the contrast quantile: select it among the samples below k.
+    const size_t kn = std::min(k - 1, static_cast<size_t>(options.noise_quantile * (sample.size() - 1)));
+    std::nth_element(sample.begin(), sample.begin() + static_cast<std::ptrdiff_t>(kn),
+                     sample.begin() + static_cast<std::ptrdiff_t>(k));
+    noise_floor = options.noise_sigmas * sample[kn] / rayleighQuantileFactor(options.noise_quantile);
+  }
+  const float high =
+      static_cast<float>(std::max({options.high_factor * contrast, options.min_high_gradient, noise_floor}));
   const float low = static_cast<float>(options.low_ratio * high);
 
   // Non-maximum suppression: 0 = suppressed, 1 = weak candidate, 2 = strong.
