@@ -30,6 +30,7 @@ struct TrackArgs {
   LocalizerArgs localizer;
   std::string motion = "constant-velocity";
   size_t max_frames = 0;
+  size_t start_frame = 0;  ///< First image tracked; > 0 starts at its ground-truth pose, no velocity.
   std::string report_dir;
   std::string init_offset;  ///< "dx,dy,dz,rx,ry,rz": metres (world axes), degrees (camera axes).
   bool calibrate = false;
@@ -68,7 +69,13 @@ void run(const TrackArgs& a) {
   // Inertial aiding from the sequence's IMU readings (body frame) and camera mounting.
   setSequenceInertial(seq, !a.no_imu, options);
   const bool use_imu = options.inertial.enabled;
-  const Pose T_init = initialPose(seq, a.init_offset);
+  if (a.start_frame >= seq.images.size()) {
+    throw Failure{fmt::format("--start-frame {}: the sequence has {} images", a.start_frame, seq.images.size())};
+  }
+  const Pose T_init = initialPose(seq, a.init_offset, a.start_frame);
+  // The velocity at the start is the sequence's own only when it starts at its first image.
+  const std::optional<Eigen::Vector3d> v_init =
+      a.start_frame == 0 ? seq.initial_velocity_world : std::optional<Eigen::Vector3d>{};
 
   const Model model = loadSequenceModel(seq);
   std::shared_ptr<GpuContext> context;
@@ -76,10 +83,12 @@ void run(const TrackArgs& a) {
   std::shared_ptr<Accelerator> accelerator;
   if (context) accelerator = take(makeGpuAccelerator(context));
   auto localizer = take(Localizer::create(model, camera, options, accelerator));
-  localizer->reset(T_init);
+  localizer->reset(T_init, v_init);
   const double setup_ms = msSince(t_start);
 
-  const size_t total = a.max_frames > 0 ? std::min(a.max_frames, seq.images.size()) : seq.images.size();
+  const size_t first = a.start_frame;
+  const size_t left = seq.images.size() - first;
+  const size_t total = a.max_frames > 0 ? std::min(a.max_frames, left) : left;
   if (!a.quiet) {
     std::printf("sequence %s: %zu of %zu images, %dx%d; model %zu triangles\n", seq.name.c_str(), total,
                 seq.images.size(), camera.width, camera.height, model.triangleCount());
@@ -110,12 +119,17 @@ void run(const TrackArgs& a) {
   std::vector<StampedPose> estimate;
   std::vector<double> total_ms, depths;
   size_t lost = 0, inertial = 0, rejected = 0, rerendered = 0, lost_after_first = 0;
+  // Readings from one frame interval before the first image tracked on (the filter starts there).
   size_t next_imu = 0;
+  if (first > 0) {
+    const int64_t t_from = seq.images[first - 1].t_ns;
+    while (next_imu < seq.imu.size() && seq.imu[next_imu].t_ns < t_from) ++next_imu;
+  }
   long first_tracked = -1;
   double first_frame_ms = 0;
   const auto t_frames = std::chrono::steady_clock::now();
   try {
-    for (size_t i = 0; i < total; ++i) {
+    for (size_t i = first; i < first + total; ++i) {
       const ImageEntry& entry = seq.images[i];
       ImageU8 gray = take(readImageU8(seq.imagePath(i), 1));
       if (use_imu) next_imu = feedSequenceImu(seq, next_imu, entry.t_ns, *localizer);
@@ -141,7 +155,7 @@ void run(const TrackArgs& a) {
           f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used, f.quality.iterations,
           f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio, f.quality.chance_inlier_ratio,
           f.quality.scale_px, f.keyframe_id, f.keyframe_age_frames, f.keyframe_adopted ? 1 : 0)));
-      if (i == 0) {
+      if (i == first) {
         first_frame_ms = f.total_ms;
       } else {
         total_ms.push_back(f.total_ms);
@@ -151,16 +165,16 @@ void run(const TrackArgs& a) {
         const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_frames).count();
         const double fps = s > 0 ? static_cast<double>(i + 1) / s : 0.0;
         if (tty) {
-          std::printf("\rframe %zu/%zu  %.1f fps  lost %zu  inertial %zu  re-rendered %zu", i + 1, total, fps, lost,
-                      inertial, rerendered);
-          if (i + 1 == total) std::printf("\n");
+          std::printf("\rframe %zu/%zu  %.1f fps  lost %zu  inertial %zu  re-rendered %zu", i + 1 - first, total, fps,
+                      lost, inertial, rerendered);
+          if (i + 1 == first + total) std::printf("\n");
           std::fflush(stdout);
         } else {
-          const size_t decile = (i + 1) * 10 / total;
+          const size_t decile = (i + 1 - first) * 10 / total;
           if (decile > last_decile) {
             last_decile = decile;
-            std::printf("frame %zu/%zu, %.1f fps, lost %zu, inertial %zu, re-rendered %zu\n", i + 1, total, fps, lost,
-                        inertial, rerendered);
+            std::printf("frame %zu/%zu, %.1f fps, lost %zu, inertial %zu, re-rendered %zu\n", i + 1 - first, total, fps,
+                        lost, inertial, rerendered);
             std::fflush(stdout);
           }
         }
@@ -198,7 +212,7 @@ void run(const TrackArgs& a) {
     input.estimate = estimate;
     input.groundtruth = seq.groundtruth;
     std::vector<int64_t> times;
-    for (size_t i = 0; i < total; ++i) times.push_back(seq.images[i].t_ns);
+    for (size_t i = first; i < first + total; ++i) times.push_back(seq.images[i].t_ns);
     input.frame_times_ns = times;
     input.frame_log = take(loadFrameLog(frames_path));
     const EvalResult result = take(evaluateTrajectory(input));
@@ -245,6 +259,9 @@ void addTrackOptions(CLI::App* cmd, const std::shared_ptr<TrackArgs>& args) {
   args->localizer.add(*cmd);
   cmd->add_option("--motion", args->motion, "Pose prediction: constant-velocity | last-pose")->capture_default_str();
   cmd->add_option("--max-frames", args->max_frames, "Track only the first N images (0 = all)")->capture_default_str();
+  cmd->add_option("--start-frame", args->start_frame,
+                  "Start at this image, at its ground-truth pose with no velocity (0 = the sequence's start)")
+      ->capture_default_str();
   cmd->add_option("--report", args->report_dir,
                   "Report folder (report.html, report.json, track.json); default "
                   "<out stem>_report next to --out");

@@ -172,9 +172,19 @@ Model loadSequenceModel(const Sequence& seq) {
   return m;
 }
 
-Pose initialPose(const Sequence& seq, const std::string& offset) {
+Pose initialPose(const Sequence& seq, const std::string& offset, size_t start_frame) {
   Pose T;
-  if (seq.initial_T_world_camera) {
+  if (start_frame > 0) {
+    const int64_t t = seq.images.at(start_frame).t_ns;
+    auto near = std::min_element(seq.groundtruth.begin(), seq.groundtruth.end(), [&](const auto& a, const auto& b) {
+      return std::llabs(a.t_ns - t) < std::llabs(b.t_ns - t);
+    });
+    if (near == seq.groundtruth.end() || std::llabs(near->t_ns - t) > 1000000) {
+      throw Failure{fmt::format("{}: --start-frame {}: no ground-truth pose within 1 ms of that image", seq.directory,
+                                start_frame)};
+    }
+    T = near->T_world_camera;
+  } else if (seq.initial_T_world_camera) {
     T = *seq.initial_T_world_camera;
   } else if (!seq.groundtruth.empty() &&
              std::llabs(seq.groundtruth.front().t_ns - seq.images.front().t_ns) < 10000000) {

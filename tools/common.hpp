@@ -84,10 +84,10 @@ Model loadSequenceModel(const Sequence& seq);
 /// The sequence's camera for localization; throws Failure for a non-pinhole model or lens
 /// distortion (not supported yet).
 PinholeCamera sequenceCamera(const Sequence& seq);
-/// The sequence's initial pose (sequence.yaml, else ground truth at the first image), moved by
-/// `offset` = "dx,dy,dz,rx,ry,rz" (metres along world axes, degrees about camera axes; "" =
-/// none); throws Failure.
-Pose initialPose(const Sequence& seq, const std::string& offset);
+/// The sequence's initial pose (sequence.yaml, else ground truth at the first image; with
+/// start_frame > 0 the ground truth at that image), moved by `offset` = "dx,dy,dz,rx,ry,rz"
+/// (metres along world axes, degrees about camera axes; "" = none); throws Failure.
+Pose initialPose(const Sequence& seq, const std::string& offset, size_t start_frame = 0);
 /// Inertial aiding from the sequence: on when it has IMU readings and `use_imu`, with its camera
 /// mounting and gravity.
 void setSequenceInertial(const Sequence& seq, bool use_imu, LocalizerOptions& options);

@@ -43,6 +43,27 @@ TEST(ConstantVelocityPrior, ExtrapolatesTheLastMotion) {
   EXPECT_TRUE(prior.consistent(*p, poseAt(100, 90), 1.0));  // no IMU: no gate
 }
 
+// A camera already in motion: the caller's velocity moves the first guesses until two timed
+// poses give the motion; without it the start pose is held.
+TEST(ConstantVelocityPrior, StartsInMotionWithTheCallersVelocity) {
+  ConstantVelocityPrior prior;
+  const Eigen::Vector3d v(25.0, 0.0, -2.0);  // m/s
+  prior.reset(poseAt(0, 0), v);
+  EXPECT_TRUE(prior.predict(0)->T_world_camera.isApprox(poseAt(0, 0)));  // no time yet
+  prior.addVisualPose(kFrameNs, poseAt(0, 0), Matrix6d::Identity());
+  const Pose guess = prior.predict(2 * kFrameNs)->T_world_camera;
+  EXPECT_TRUE(guess.translation().isApprox(poseAt(0, 0).translation() + 0.05 * v, 1e-12));
+  EXPECT_TRUE(guess.linear().isApprox(poseAt(0, 0).linear()));
+  // Two timed poses: their motion takes over.
+  prior.addVisualPose(2 * kFrameNs, poseAt(0.1, 2), Matrix6d::Identity());
+  const Pose expected = poseAt(0.1, 2) * expSE3(logSE3(poseAt(0, 0).inverse() * poseAt(0.1, 2)));
+  EXPECT_TRUE(prior.predict(3 * kFrameNs)->T_world_camera.isApprox(expected, 1e-12));
+  // A non-finite velocity is not taken.
+  prior.reset(poseAt(0, 0), Eigen::Vector3d(std::nan(""), 0, 0));
+  prior.addVisualPose(kFrameNs, poseAt(0, 0), Matrix6d::Identity());
+  EXPECT_TRUE(prior.predict(2 * kFrameNs)->T_world_camera.isApprox(poseAt(0, 0)));
+}
+
 TEST(ConstantVelocityPrior, LastPoseModelAndReset) {
   ConstantVelocityPrior prior(MotionModel::kLastPose);
   prior.reset(poseAt(0, 0));

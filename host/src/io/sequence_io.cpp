@@ -393,6 +393,15 @@ Result<Sequence> loadSequence(const std::string& directory) {
       if (!T.ok()) return T.error();
       seq.initial_T_world_camera = *T;
     }
+    if (const YAML::Node n = root["initial_velocity_world"]; n && !n.IsNull()) {
+      auto v = yamlNumbers(yaml_path, n, "initial_velocity_world");
+      if (!v.ok()) return v.error();
+      if (v->size() != 3) {
+        return lineError(yaml_path, yamlLine(n),
+                         fmt::format("'initial_velocity_world' needs 3 numbers (m/s), got {}", v->size()));
+      }
+      seq.initial_velocity_world = Eigen::Vector3d((*v)[0], (*v)[1], (*v)[2]);
+    }
     if (const YAML::Node n = root["gravity_world"]; n) {
       auto g = yamlNumbers(yaml_path, n, "gravity_world");
       if (!g.ok()) return g.error();
@@ -467,6 +476,9 @@ Status saveSequence(const Sequence& seq, const std::string& directory) {
     return invalid(fmt::format("{}: initial_T_world_camera is not a rigid transform", yaml_path));
   }
   if (!seq.gravity_world.allFinite()) return invalid(fmt::format("{}: non-finite gravity_world", yaml_path));
+  if (seq.initial_velocity_world && !seq.initial_velocity_world->allFinite()) {
+    return invalid(fmt::format("{}: non-finite initial_velocity_world", yaml_path));
+  }
   if (seq.imu_noise) VKLOC_TRY_STATUS(validateNoise(*seq.imu_noise, yaml_path));
   const std::string name = yamlQuoted(seq.name);
   const std::string model = yamlQuoted(seq.model);
@@ -489,6 +501,11 @@ Status saveSequence(const Sequence& seq, const std::string& directory) {
   yaml += fmt::format("unit_scale: {}\n", num(seq.unit_scale));
   if (seq.initial_T_world_camera) {
     yaml += fmt::format("initial_T_world_camera: {}  # tx ty tz qx qy qz qw\n", poseList7(*seq.initial_T_world_camera));
+  }
+  if (seq.initial_velocity_world) {
+    const Eigen::Vector3d& v = *seq.initial_velocity_world;
+    yaml += fmt::format("initial_velocity_world: [{:.9g}, {:.9g}, {:.9g}]  # m/s, of the camera at the first image\n",
+                        v.x(), v.y(), v.z());
   }
   yaml += fmt::format("gravity_world: {}  # m/s^2\n", numberList(seq.gravity_world.data(), 3));
   if (seq.imu_noise) {

@@ -333,13 +333,13 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
   return std::unique_ptr<Localizer>(new Localizer(std::move(impl)));
 }
 
-void Localizer::reset(const Pose& T_world_camera) {
+void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vector3d>& v_world_camera) {
   Impl& m = *impl_;
   m.keyframes->reset();
   m.uploaded_id = 0;
   m.last_t_ns.reset();
   m.tracked_since_reset = false;
-  m.motion->reset(T_world_camera);  // timestamps may start over
+  m.motion->reset(T_world_camera, v_world_camera);  // timestamps may start over
 }
 
 Status Localizer::addImu(const ImuSample& sample) { return impl_->motion->addImu(sample); }

@@ -38,7 +38,14 @@ std::optional<MotionPrediction> ConstantVelocityPrior::predict(int64_t t_ns) con
   if (!last_pose_) return std::nullopt;
   MotionPrediction p;
   p.T_world_camera = *last_pose_;
-  if (model_ == MotionModel::kLastPose || !prev_pose_ || last_pose_t_ns_ <= prev_pose_t_ns_) return p;
+  if (model_ == MotionModel::kLastPose) return p;
+  if (!prev_pose_ && initial_velocity_ && last_pose_timed_) {
+    // Only the start pose and the caller's velocity are known: move at that velocity (up to 1 s).
+    const double dt = static_cast<double>(t_ns - last_pose_t_ns_) * 1e-9;
+    if (dt > 0 && dt <= 1.0) p.T_world_camera.translation() += dt * *initial_velocity_;
+    return p;
+  }
+  if (!prev_pose_ || last_pose_t_ns_ <= prev_pose_t_ns_) return p;
   // Constant velocity: the last inter-frame motion (camera frame) scaled to the time step.
   const Vector6d xi = logSE3(prev_pose_->inverse() * *last_pose_);
   const double scale =
@@ -49,8 +56,12 @@ std::optional<MotionPrediction> ConstantVelocityPrior::predict(int64_t t_ns) con
 }
 
 void ConstantVelocityPrior::push(int64_t t_ns, const Pose& T_world_camera) {
-  prev_pose_ = last_pose_;
-  prev_pose_t_ns_ = last_pose_t_ns_;
+  // The reset pose has no time: it does not make a motion with the first timed pose.
+  if (last_pose_timed_) {
+    prev_pose_ = last_pose_;
+    prev_pose_t_ns_ = last_pose_t_ns_;
+  }
+  last_pose_timed_ = true;
   last_pose_ = T_world_camera;
   last_pose_t_ns_ = t_ns;
 }
@@ -68,11 +79,15 @@ std::optional<BridgedPose> ConstantVelocityPrior::bridge(int64_t, const std::opt
   return std::nullopt;
 }
 
-void ConstantVelocityPrior::reset(const std::optional<Pose>& T_world_camera) {
+void ConstantVelocityPrior::reset(const std::optional<Pose>& T_world_camera,
+                                  const std::optional<Eigen::Vector3d>& v_world_camera) {
   prev_pose_.reset();
   last_pose_.reset();
   last_imu_t_ns_.reset();
+  last_pose_timed_ = false;
+  initial_velocity_.reset();
   if (T_world_camera && isValidPose(*T_world_camera)) last_pose_ = *T_world_camera;
+  if (v_world_camera && v_world_camera->allFinite()) initial_velocity_ = *v_world_camera;
 }
 
 // --- InertialPrior --------------------------------------------------------------------------------
@@ -130,9 +145,10 @@ std::optional<BridgedPose> InertialPrior::bridge(int64_t t_ns, const std::option
   return out;
 }
 
-void InertialPrior::reset(const std::optional<Pose>& T_world_camera) {
+void InertialPrior::reset(const std::optional<Pose>& T_world_camera,
+                          const std::optional<Eigen::Vector3d>& v_world_camera) {
   predictor_.reset();  // timestamps may start over
-  motion_.reset(T_world_camera);
+  motion_.reset(T_world_camera, v_world_camera);
 }
 
 }  // namespace vkloc

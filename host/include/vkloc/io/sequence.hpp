@@ -40,9 +40,12 @@ struct Sequence {
   /// Model file (relative to `directory` or absolute), or a built-in model name ("city",
   /// "room"); empty when the sequence has no model (e.g. an imported EuRoC folder).
   std::string model;
-  Pose T_world_model = Pose::Identity();           ///< Applied to the model when loading it.
-  double unit_scale = 1.0;                         ///< Model units to metres.
-  std::optional<Pose> initial_T_world_camera;      ///< Pose at the first image when known.
+  Pose T_world_model = Pose::Identity();       ///< Applied to the model when loading it.
+  double unit_scale = 1.0;                     ///< Model units to metres.
+  std::optional<Pose> initial_T_world_camera;  ///< Pose at the first image when known.
+  /// Velocity of the camera at the first image (world frame, m/s) when known: a sequence that
+  /// starts in motion is then tracked from its first frame without waiting for the filter.
+  std::optional<Eigen::Vector3d> initial_velocity_world;
   Eigen::Vector3d gravity_world{0.0, 0.0, -9.81};  ///< m/s^2.
   SequenceCamera camera;
   std::vector<ImageEntry> images;

@@ -159,8 +159,10 @@ class Localizer {
   Status addImu(const ImuSample& sample);
   /// Forgets the motion, the IMU readings and the keyframe and restarts from T_world_camera
   /// (e.g. the known initial pose, or after relocalization). Timestamps may start over. An
-  /// invalid pose is ignored (the next localize() then needs a guess).
-  void reset(const Pose& T_world_camera);
+  /// invalid pose is ignored (the next localize() then needs a guess). v_world_camera: the
+  /// camera's velocity in the world frame (m/s) when known (a camera already in motion), else
+  /// the motion prior starts from an unknown velocity.
+  void reset(const Pose& T_world_camera, const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt);
 
   /// One line: renderer, live/alignment backend and why it was chosen, keyframe policy and threading.
   std::string backendSummary() const;

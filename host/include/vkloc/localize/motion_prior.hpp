@@ -80,8 +80,11 @@ class MotionPrior {
   virtual std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
                                             const Pose& guess) = 0;
   /// Forgets the motion (and IMU readings: timestamps may start over) and restarts from
-  /// T_world_camera, or from nothing when it is nullopt or invalid.
-  virtual void reset(const std::optional<Pose>& T_world_camera) = 0;
+  /// T_world_camera, or from nothing when it is nullopt or invalid, moving at v_world_camera
+  /// (the camera's velocity in the world frame, m/s) when it is given and finite, else at an
+  /// unknown velocity.
+  virtual void reset(const std::optional<Pose>& T_world_camera,
+                     const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt) = 0;
   /// The last trusted (or bridged, or reset) camera pose.
   virtual std::optional<Pose> lastPose() const = 0;
 };
@@ -100,7 +103,8 @@ class ConstantVelocityPrior final : public MotionPrior {
   /// reports nothing.
   std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
                                     const Pose& guess) override;
-  void reset(const std::optional<Pose>& T_world_camera) override;
+  void reset(const std::optional<Pose>& T_world_camera,
+             const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt) override;
   std::optional<Pose> lastPose() const override { return last_pose_; }
 
   /// Moves the motion on by one pose at t_ns (the last one becomes the one before).
@@ -112,6 +116,8 @@ class ConstantVelocityPrior final : public MotionPrior {
   std::optional<Pose> prev_pose_;
   int64_t last_pose_t_ns_ = 0;
   int64_t prev_pose_t_ns_ = 0;
+  bool last_pose_timed_ = false;  ///< last_pose_ came with a time (not only from reset).
+  std::optional<Eigen::Vector3d> initial_velocity_;
   std::optional<int64_t> last_imu_t_ns_;
 };
 
@@ -129,7 +135,8 @@ class InertialPrior final : public MotionPrior {
   /// pose, translation the prediction's), which also carries the motion model on.
   std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
                                     const Pose& guess) override;
-  void reset(const std::optional<Pose>& T_world_camera) override;
+  void reset(const std::optional<Pose>& T_world_camera,
+             const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt) override;
   std::optional<Pose> lastPose() const override { return motion_.lastPose(); }
 
  private:
