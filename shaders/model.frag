@@ -4,6 +4,8 @@
 #include "render_layout.h"
 #include "octahedral.glsl"
 
+// Textures per descriptor set (engine/src/textures.hpp): the bound set holds this draw's
+// texture at slot pc.texture, a dynamically uniform index.
 layout(constant_id = 0) const int kTextureCount = 1;
 layout(constant_id = 1) const bool kWriteNormals = true;
 
@@ -20,6 +22,7 @@ layout(location = 2) out uint out_normal;   // octahedral camera-frame normal, p
 void main() {
   vec4 c = pc.base_color * in_color;
   if ((pc.flags & VKLOC_FLAG_TEXTURED) != 0u) {
+    // Trilinear: the sampler has mipmapMode LINEAR and every level of the texture.
     c *= texture(textures[pc.texture], in_uv);
   }
   out_color = vec4(c.rgb, 1.0);

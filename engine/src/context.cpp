@@ -356,7 +356,22 @@ Result<std::shared_ptr<GpuContext>> GpuContext::create(const GpuOptions& options
   VkPhysicalDeviceFeatures features{};
   features.shaderSampledImageArrayDynamicIndexing = supported.shaderSampledImageArrayDynamicIndexing;
   features.shaderStorageImageExtendedFormats = supported.shaderStorageImageExtendedFormats;
+  impl->dynamic_sampler_indexing = supported.shaderSampledImageArrayDynamicIndexing == VK_TRUE;
+  // Descriptor indexing is optional: only its update-after-bind limits for sampled images are
+  // used, by models with more textures than the plain per-stage limits allow (textures.hpp).
+  VkPhysicalDeviceVulkan12Features supported12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+  VkPhysicalDeviceFeatures2 supported2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+  supported2.pNext = &supported12;
+  vkGetPhysicalDeviceFeatures2(impl->physical, &supported2);
+  VkPhysicalDeviceProperties2 properties2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+  properties2.pNext = &impl->vulkan12_properties;
+  vkGetPhysicalDeviceProperties2(impl->physical, &properties2);
+  impl->vulkan12_properties.pNext = nullptr;
+  VkPhysicalDeviceVulkan12Features features12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+  features12.descriptorBindingSampledImageUpdateAfterBind = supported12.descriptorBindingSampledImageUpdateAfterBind;
+  impl->sampled_image_update_after_bind = supported12.descriptorBindingSampledImageUpdateAfterBind == VK_TRUE;
   VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+  dci.pNext = &features12;
   dci.queueCreateInfoCount = 1;
   dci.pQueueCreateInfos = &qci;
   dci.pEnabledFeatures = &features;
@@ -432,7 +447,7 @@ bool GpuContext::Impl::linearImageSupported(VkFormat format, VkImageUsageFlags u
 
 Result<engine::Image> GpuContext::Impl::createImage(uint32_t width, uint32_t height, VkFormat format,
                                                     VkImageUsageFlags usage, VkImageAspectFlags aspect,
-                                                    bool linear_host) {
+                                                    bool linear_host, uint32_t mip_levels) {
   engine::Image out;
   out.format = format;
   out.width = width;
@@ -441,7 +456,7 @@ Result<engine::Image> GpuContext::Impl::createImage(uint32_t width, uint32_t hei
   ici.imageType = VK_IMAGE_TYPE_2D;
   ici.format = format;
   ici.extent = {width, height, 1};
-  ici.mipLevels = 1;
+  ici.mipLevels = linear_host ? 1 : std::max(1u, mip_levels);
   ici.arrayLayers = 1;
   ici.samples = VK_SAMPLE_COUNT_1_BIT;
   ici.tiling = linear_host ? VK_IMAGE_TILING_LINEAR : VK_IMAGE_TILING_OPTIMAL;
@@ -470,7 +485,7 @@ Result<engine::Image> GpuContext::Impl::createImage(uint32_t width, uint32_t hei
   vci.image = image;
   vci.viewType = VK_IMAGE_VIEW_TYPE_2D;
   vci.format = format;
-  vci.subresourceRange = {aspect, 0, 1, 0, 1};
+  vci.subresourceRange = {aspect, 0, ici.mipLevels, 0, 1};
   VkImageView view = VK_NULL_HANDLE;
   VKLOC_VK(vkCreateImageView(device, &vci, nullptr, &view));
   out.view = engine::DeviceHandle<VkImageView>(device, view, vkDestroyImageView);

@@ -23,6 +23,15 @@ struct GpuContext::Impl {
   /// True when device-local memory is also host-visible (integrated GPUs, lavapipe): buffers
   /// are then mapped directly and staging copies are skipped.
   bool unified_memory = false;
+  /// shaderSampledImageArrayDynamicIndexing is enabled: shaders may index sampler arrays with
+  /// dynamically uniform values (a push constant).
+  bool dynamic_sampler_indexing = false;
+  /// descriptorBindingSampledImageUpdateAfterBind (descriptor indexing) is enabled: descriptor
+  /// sets of sampled images may be created update-after-bind and use the larger limits of
+  /// vulkan12_properties.
+  bool sampled_image_update_after_bind = false;
+  /// Vulkan 1.2 properties (descriptor indexing limits among them); pNext is null.
+  VkPhysicalDeviceVulkan12Properties vulkan12_properties{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_PROPERTIES};
   GpuDeviceInfo info;
   bool validation = false;
   WarningHandler on_validation_message;
@@ -52,11 +61,11 @@ struct GpuContext::Impl {
   /// device-local (which is also host-visible on unified memory, and then mapped too).
   Result<engine::Buffer> createBuffer(VkDeviceSize size, VkBufferUsageFlags usage, bool host_visible);
 
-  /// Creates a 2D image with one mip level and a view of it: optimal tiling in device-local
-  /// memory, or (linear_host) linear tiling in host-visible memory, mapped, so the host reads
-  /// it without a copy.
+  /// Creates a 2D image with `mip_levels` levels and a view of all of them: optimal tiling in
+  /// device-local memory, or (linear_host, one level only) linear tiling in host-visible memory,
+  /// mapped, so the host reads it without a copy.
   Result<engine::Image> createImage(uint32_t width, uint32_t height, VkFormat format, VkImageUsageFlags usage,
-                                    VkImageAspectFlags aspect, bool linear_host = false);
+                                    VkImageAspectFlags aspect, bool linear_host = false, uint32_t mip_levels = 1);
 
   /// True when a linear-tiling 2D image of `format` with exactly `usage` and at least this
   /// size can be created.

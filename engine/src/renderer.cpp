@@ -12,6 +12,7 @@
 #include "lod.hpp"
 #include "render_layout.h"
 #include "shader_registry.hpp"
+#include "textures.hpp"
 #include "vkloc/engine/gpu.hpp"
 
 namespace vkloc {
@@ -98,16 +99,11 @@ struct GpuRenderer::Impl {
   std::vector<bool> texture_ok;
   std::array<double, 3> origin{0, 0, 0};  // world frame, metres; vertices are stored relative to it
   Buffer positions, attributes, indices;
-  std::vector<engine::Image> textures;
-  DeviceHandle<VkSampler> sampler;
-  DeviceHandle<VkDescriptorSetLayout> set_layout;
-  DeviceHandle<VkDescriptorPool> descriptor_pool;
-  VkDescriptorSet descriptor_set = VK_NULL_HANDLE;
+  engine::TextureSet textures;
   DeviceHandle<VkPipelineLayout> pipeline_layout;
   DeviceHandle<VkRenderPass> render_pass[2];  // [with normals]
   DeviceHandle<VkShaderModule> vert, frag;
   std::map<int, DeviceHandle<VkPipeline>> pipelines;  // key: normals | cull << 1
-  int texture_count = 1;
 
   /// Render targets are linear images in host-visible memory that the host reads directly
   /// (unified memory: lavapipe, integrated GPUs); otherwise they are copied to a buffer.
@@ -186,68 +182,15 @@ Status GpuRenderer::Impl::init(const Model& model, const GpuRendererOptions& opt
   VKLOC_TRY_STATUS(make(indices, lod.indices.data(), lod.indices.size() * sizeof(uint32_t),
                         VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT));
 
-  // Textures (a 1x1 white one when the model has none, so the descriptor array is never empty).
-  std::vector<Texture> host_textures = model.textures;
-  if (host_textures.empty()) host_textures.push_back(Texture{"white", 1, 1, {255, 255, 255, 255}});
-  texture_count = static_cast<int>(host_textures.size());
-  if (static_cast<uint32_t>(texture_count) > ctx->properties.limits.maxPerStageDescriptorSamplers ||
-      static_cast<uint32_t>(texture_count) > ctx->properties.limits.maxDescriptorSetSampledImages) {
-    return makeError(ErrorCode::kUnsupported,
-                     fmt::format("{}: {} textures exceed this device's limit of {} per shader stage", model.source,
-                                 texture_count, ctx->properties.limits.maxPerStageDescriptorSamplers));
-  }
-  for (const Texture& t : host_textures) {
-    auto img =
-        ctx->createImage(static_cast<uint32_t>(t.width), static_cast<uint32_t>(t.height), kColorFormat,
-                         VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_IMAGE_ASPECT_COLOR_BIT);
-    if (!img.ok()) return img.error();
-    VKLOC_TRY_STATUS(ctx->uploadImage(*img, t.rgba.data(), t.rgba.size()));
-    textures.push_back(std::move(*img));
-  }
-  VkSamplerCreateInfo sci{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
-  sci.magFilter = sci.minFilter = VK_FILTER_LINEAR;
-  sci.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
-  sci.addressModeU = sci.addressModeV = sci.addressModeW = VK_SAMPLER_ADDRESS_MODE_REPEAT;
-  sci.maxLod = 0.0f;
-  VkSampler s = VK_NULL_HANDLE;
-  VKLOC_VK(vkCreateSampler(device, &sci, nullptr, &s));
-  sampler = DeviceHandle<VkSampler>(device, s, vkDestroySampler);
-
-  VkDescriptorSetLayoutBinding binding{};
-  binding.binding = 0;
-  binding.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  binding.descriptorCount = static_cast<uint32_t>(texture_count);
-  binding.stageFlags = VK_SHADER_STAGE_FRAGMENT_BIT;
-  VkDescriptorSetLayoutCreateInfo lci{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  lci.bindingCount = 1;
-  lci.pBindings = &binding;
-  VkDescriptorSetLayout layout = VK_NULL_HANDLE;
-  VKLOC_VK(vkCreateDescriptorSetLayout(device, &lci, nullptr, &layout));
-  set_layout = DeviceHandle<VkDescriptorSetLayout>(device, layout, vkDestroyDescriptorSetLayout);
-  VkDescriptorPoolSize pool_size{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, static_cast<uint32_t>(texture_count)};
-  VkDescriptorPoolCreateInfo dpci{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-  dpci.maxSets = 1;
-  dpci.poolSizeCount = 1;
-  dpci.pPoolSizes = &pool_size;
-  VkDescriptorPool pool = VK_NULL_HANDLE;
-  VKLOC_VK(vkCreateDescriptorPool(device, &dpci, nullptr, &pool));
-  descriptor_pool = DeviceHandle<VkDescriptorPool>(device, pool, vkDestroyDescriptorPool);
-  VkDescriptorSetAllocateInfo dsai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-  dsai.descriptorPool = pool;
-  dsai.descriptorSetCount = 1;
-  dsai.pSetLayouts = &layout;
-  VKLOC_VK(vkAllocateDescriptorSets(device, &dsai, &descriptor_set));
-  std::vector<VkDescriptorImageInfo> infos;
-  for (const auto& t : textures) {
-    infos.push_back({sampler.get(), t.view.get(), VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL});
-  }
-  VkWriteDescriptorSet write{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-  write.dstSet = descriptor_set;
-  write.dstBinding = 0;
-  write.descriptorCount = static_cast<uint32_t>(infos.size());
-  write.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  write.pImageInfo = infos.data();
-  vkUpdateDescriptorSets(device, 1, &write, 0, nullptr);
+  // Textures with their mip chains, in descriptor sets of as many as the device allows (see
+  // textures.hpp); a 1x1 white one when the model has none, so that no set is empty.
+  engine::TextureSetOptions texture_options;
+  texture_options.host_mipmaps = options.host_mipmaps;
+  texture_options.max_per_set = static_cast<uint32_t>(std::max(0, options.max_textures_per_set));
+  auto created_textures = engine::TextureSet::create(*ctx, model.textures, texture_options);
+  if (!created_textures.ok()) return created_textures.error();
+  textures = std::move(*created_textures);
+  const VkDescriptorSetLayout layout = textures.layout.get();
   texture_ok.assign(materials.size(), false);
   for (size_t m = 0; m < materials.size(); ++m) {
     texture_ok[m] = materials[m].texture >= 0 && materials[m].texture < static_cast<int>(model.textures.size());
@@ -360,7 +303,7 @@ Result<VkPipeline> GpuRenderer::Impl::pipeline(bool normals, bool cull) {
   if (auto it = pipelines.find(key); it != pipelines.end()) return it->second.get();
 
   const VkSpecializationMapEntry entries[2] = {{0, 0, 4}, {1, 4, 4}};
-  const int32_t spec_data[2] = {texture_count, normals ? 1 : 0};
+  const int32_t spec_data[2] = {static_cast<int32_t>(textures.slots), normals ? 1 : 0};
   VkSpecializationInfo spec{2, entries, sizeof(spec_data), spec_data};
   VkPipelineShaderStageCreateInfo stages[2]{};
   stages[0].sType = stages[1].sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
@@ -569,15 +512,24 @@ Result<RenderOutput> GpuRenderer::Impl::render(const PinholeCamera& camera, cons
     const VkDeviceSize offsets[2] = {0, 0};
     vkCmdBindVertexBuffers(cmd, 0, 2, vbs, offsets);
     vkCmdBindIndexBuffer(cmd, indices.buffer.get(), 0, VK_INDEX_TYPE_UINT32);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_layout.get(), 0, 1, &descriptor_set, 0,
+    // The shader statically uses the texture array: a set is bound before the first draw, then
+    // another only when a draw's texture lies in another batch (textures.hpp).
+    uint32_t bound_set = 0;
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_layout.get(), 0, 1, &textures.sets[0], 0,
                             nullptr);
     int bound_material = -2;
     for (const Draw& d : draws) {
       if (d.material != bound_material) {
         const Material& m = materials[static_cast<size_t>(d.material)];
+        const bool textured = texture_ok[static_cast<size_t>(d.material)];
         for (int k = 0; k < 4; ++k) push.base_color[k] = m.base_color[k];
-        push.texture = texture_ok[static_cast<size_t>(d.material)] ? m.texture : 0;
-        push.flags = texture_ok[static_cast<size_t>(d.material)] ? VKLOC_FLAG_TEXTURED : 0u;
+        push.texture = textured ? textures.slotOf(m.texture) : 0;
+        push.flags = textured ? VKLOC_FLAG_TEXTURED : 0u;
+        if (textured && textures.setOf(m.texture) != bound_set) {
+          bound_set = textures.setOf(m.texture);
+          vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_layout.get(), 0, 1,
+                                  &textures.sets[bound_set], 0, nullptr);
+        }
         vkCmdPushConstants(cmd, pipeline_layout.get(), VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
                            sizeof(push), &push);
         bound_material = d.material;

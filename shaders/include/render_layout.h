@@ -28,7 +28,7 @@ struct ModelPush {
   VKLOC_VEC4(intrinsics);
   // Material base colour, 0..1 RGBA.
   VKLOC_VEC4(base_color);
-  VKLOC_INT(texture);  // Index into the texture array, or -1.
+  VKLOC_INT(texture);  // Slot in the texture array of the bound descriptor set (textures.hpp).
   VKLOC_UINT(flags);
   VKLOC_INT(pad0);
   VKLOC_INT(pad1);

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "vkloc/core/camera.hpp"
@@ -173,6 +174,124 @@ inline Model makeCheckerQuad(const Eigen::Vector3d& corner, const Eigen::Vector3
   m.textures = {makeCheckerTexture(n, {0, 0, 0, 255}, {255, 255, 255, 255})};
   m.materials = {Material{"checker", {1, 1, 1, 1}, 0}};
   return m;
+}
+
+/// A size x size RGBA8 texture of 1-texel vertical stripes, black at even x and white at odd
+/// x: mean 127.5 and all of its detail at the highest frequency, the worst case for aliasing.
+inline Texture makeStripeTexture(int size) {
+  Texture tex;
+  tex.name = "stripes";
+  tex.width = size;
+  tex.height = size;
+  tex.rgba.resize(static_cast<size_t>(size) * size * 4);
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      const uint8_t v = x % 2 == 0 ? 0 : 255;
+      uint8_t* p = &tex.rgba[(static_cast<size_t>(y) * size + x) * 4];
+      p[0] = p[1] = p[2] = v;
+      p[3] = 255;
+    }
+  }
+  return tex;
+}
+
+/// A size x size RGBA8 texture with detail at every scale: a checkerboard of 16-texel squares
+/// in red, diagonal sine waves of periods 7 and 3 texels in green and blue, and hash noise.
+inline Texture makeDetailTexture(int size) {
+  Texture tex;
+  tex.name = "detail";
+  tex.width = size;
+  tex.height = size;
+  tex.rgba.resize(static_cast<size_t>(size) * size * 4);
+  for (int y = 0; y < size; ++y) {
+    for (int x = 0; x < size; ++x) {
+      uint32_t h = static_cast<uint32_t>(x) * 73856093u ^ static_cast<uint32_t>(y) * 19349663u;
+      h = (h ^ (h >> 13)) * 0x5bd1e995u;
+      const double noise = static_cast<double>((h >> 8) & 63) - 32.0;
+      uint8_t* p = &tex.rgba[(static_cast<size_t>(y) * size + x) * 4];
+      const double r = ((x / 16 + y / 16) % 2 == 0 ? 40.0 : 215.0) + noise;
+      const double g = 127.5 + 100.0 * std::sin(2 * M_PI * (x + y) / 7.0) + noise;
+      const double b = 127.5 + 100.0 * std::sin(2 * M_PI * (x - 2 * y) / 3.0) - noise;
+      p[0] = static_cast<uint8_t>(std::clamp(r, 0.0, 255.0));
+      p[1] = static_cast<uint8_t>(std::clamp(g, 0.0, 255.0));
+      p[2] = static_cast<uint8_t>(std::clamp(b, 0.0, 255.0));
+      p[3] = 255;
+    }
+  }
+  return tex;
+}
+
+/// A square of side 2 * half_size in the plane z = 0 centred on the origin, front side up
+/// (+z), textured with `tex` repeated `repeats` times along each side (uv 0..repeats), white
+/// base colour.
+inline Model makeTexturedGround(double half_size, const Texture& tex, double repeats) {
+  Model m = makeQuad({-half_size, half_size, 0}, {2 * half_size, 0, 0}, {0, -2 * half_size, 0});
+  m.source = "analytic textured ground";
+  for (float& uv : m.uvs) uv = static_cast<float>(uv * repeats);
+  m.textures = {tex};
+  m.materials = {Material{"ground", {1, 1, 1, 1}, 0}};
+  return m;
+}
+
+/// Colour `which` (0 or 1) of tile k of makeTileWall: distinct for every k < 400 and between
+/// the two colours of a tile.
+inline std::array<uint8_t, 4> tileColor(int k, int which) {
+  const auto r = static_cast<uint8_t>(10 + (k % 20) * 12);
+  const auto g = static_cast<uint8_t>(10 + (k / 20) * 12);
+  const auto b = static_cast<uint8_t>((k * 37) % 256);
+  if (which == 0) return {r, g, b, 255};
+  return {static_cast<uint8_t>(255 - r), static_cast<uint8_t>(255 - g), static_cast<uint8_t>(255 - b), 255};
+}
+
+/// A wall of cols x rows square tiles in the plane z = `z` facing the origin (a camera at the
+/// origin with identity pose sees tile (0, 0) top-left). Tile k = row * cols + col has side
+/// `size`, pitch `pitch` (metres), the grid centred on the z axis, and its own material k with
+/// its own 8 x 8 texture k: texels with x < 4 == y < 4 (top-left and bottom-right quadrants) in
+/// tileColor(k, 0), the others tileColor(k, 1). One draw range per tile, one block.
+inline Model makeTileWall(int cols, int rows, double z, double pitch, double size) {
+  Model m;
+  m.source = "analytic tile wall";
+  for (int k = 0; k < cols * rows; ++k) {
+    const int col = k % cols, row = k / cols;
+    const Eigen::Vector3d corner((col - cols / 2.0) * pitch + (pitch - size) / 2,
+                                 (row - rows / 2.0) * pitch + (pitch - size) / 2, z);
+    const auto first = static_cast<uint32_t>(m.indices.size());
+    appendQuad(m, corner, {size, 0, 0}, {0, size, 0});
+    m.ranges.push_back(DrawRange{first, 6, k});
+    Texture tex;
+    tex.name = "tile" + std::to_string(k);
+    tex.width = tex.height = 8;
+    tex.rgba.resize(8 * 8 * 4);
+    for (int y = 0; y < 8; ++y) {
+      for (int x = 0; x < 8; ++x) {
+        const auto c = tileColor(k, (x < 4) == (y < 4) ? 0 : 1);
+        std::copy(c.begin(), c.end(), &tex.rgba[(static_cast<size_t>(y) * 8 + x) * 4]);
+      }
+    }
+    m.textures.push_back(std::move(tex));
+    m.materials.push_back(Material{"tile" + std::to_string(k), {1, 1, 1, 1}, k});
+  }
+  Aabb bounds;
+  for (size_t i = 0; i < m.vertexCount(); ++i) bounds.extend(&m.positions[3 * i]);
+  Block block;
+  block.bounds = bounds;
+  block.first_range = 0;
+  block.range_count = static_cast<uint32_t>(m.ranges.size());
+  block.triangle_count = static_cast<uint32_t>(m.triangleCount());
+  m.blocks = {block};
+  m.bounds = bounds;
+  return m;
+}
+
+/// Pixel (rounded pinhole coordinates) of texel (tx, ty)'s centre of tile k of
+/// makeTileWall(cols, rows, z, pitch, size) seen by `cam` at the origin with identity pose.
+inline std::array<int, 2> tileTexelPixel(const PinholeCamera& cam, int cols, int rows, double z, double pitch,
+                                         double size, int k, int tx, int ty) {
+  const int col = k % cols, row = k / cols;
+  const double x = (col - cols / 2.0) * pitch + (pitch - size) / 2 + (tx + 0.5) / 8.0 * size;
+  const double y = (row - rows / 2.0) * pitch + (pitch - size) / 2 + (ty + 0.5) / 8.0 * size;
+  return {static_cast<int>(std::lround(cam.fx * x / z + cam.cx)),
+          static_cast<int>(std::lround(cam.fy * y / z + cam.cy))};
 }
 
 /// Bilinear REPEAT lookup with texel centres at (k + 0.5) / size, uv (0, 0) at the image's

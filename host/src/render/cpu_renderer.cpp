@@ -11,6 +11,17 @@
 //  - Depth test: strictly nearer camera z wins, so of equal depths the first drawn stays.
 //  - Attributes (uv, vertex colour) are interpolated perspective-correctly; depth is the exact
 //    camera z of the triangle's plane along the pixel's ray.
+//  - Textures are sampled trilinearly from a mip chain (buildMipLevels) with REPEAT wrapping, as
+//    Vulkan does with mipmapMode LINEAR, minLod 0 and no maxLod clamp. The level of detail is
+//    per 2 x 2 pixel quad, as GPUs compute it: with (s, t) the interpolated uv in level-0 texels
+//    (s = u_tex width, t = v_tex height) at the quad's pixel centres (x0, y0), (x0 + 1, y0),
+//    (x0, y0 + 1) (x0, y0 even; the plane equations extend outside the triangle as helper
+//    invocations do),
+//        rho_x = |(s, t)(x0 + 1, y0) - (s, t)(x0, y0)|,  rho_y = |(s, t)(x0, y0 + 1) - (s, t)(x0, y0)|,
+//        lambda = log2(max(rho_x, rho_y))   (Vulkan spec, "Scale Factor Operation", with coarse
+//    derivatives). lambda <= 0 samples level 0 bilinearly (magnification); otherwise levels
+//    floor(lambda) and floor(lambda) + 1 are sampled bilinearly and blended by lambda's fraction,
+//    and lambda beyond the last level samples the last level.
 //
 // Winding and back faces. Model triangles (a, b, c) are counter-clockwise seen from outside,
 // i.e. the outward normal is n = (b - a) x (c - a). A rigid transform (det R = +1) preserves
@@ -40,6 +51,8 @@
 #include <limits>
 #include <string>
 #include <vector>
+
+#include "vkloc/render/mipmap.hpp"
 
 namespace vkloc {
 namespace {
@@ -130,6 +143,29 @@ void sampleBilinearRepeat(const Texture& tex, double s, double t, double rgb[3])
   }
 }
 
+/// Trilinear lookup with REPEAT wrap at level of detail log2(rho) (see the file comment): `rho`
+/// is the pixel footprint in level-0 texels; levels[k] is mip level k + 1 of `base`.
+void sampleTrilinearRepeat(const Texture& base, const std::vector<Texture>& levels, double s, double t, double rho,
+                           double rgb[3]) {
+  const double lambda = rho > 0 && std::isfinite(rho) ? std::log2(rho) : 0.0;
+  if (!(lambda > 0) || levels.empty()) {
+    sampleBilinearRepeat(base, s, t, rgb);
+    return;
+  }
+  const int last = static_cast<int>(levels.size());
+  auto level = [&](int l) -> const Texture& { return l == 0 ? base : levels[static_cast<size_t>(l - 1)]; };
+  if (lambda >= last) {
+    sampleBilinearRepeat(level(last), s, t, rgb);
+    return;
+  }
+  const int d = static_cast<int>(std::floor(lambda));
+  const double f = lambda - d;
+  double hi[3], lo[3];
+  sampleBilinearRepeat(level(d), s, t, hi);
+  sampleBilinearRepeat(level(d + 1), s, t, lo);
+  for (int ch = 0; ch < 3; ++ch) rgb[ch] = (1 - f) * hi[ch] + f * lo[ch];
+}
+
 /// Checks what the rasterizer indexes: attribute sizes, indices, ranges, blocks, materials,
 /// textures, finite positions and uvs. Returns a one-line message, empty when fine.
 std::string checkModel(const Model& m) {
@@ -183,9 +219,12 @@ std::string checkModel(const Model& m) {
 /// The rasterizer state for one render.
 class Rasterizer {
  public:
-  Rasterizer(const Model& model, const PinholeCamera& camera, const RenderSettings& settings,
-             const Pose& T_camera_world, RenderOutput& out)
+  /// `mip_levels[k]` holds levels 1.. of model.textures[k] (buildMipLevels) for every texture a
+  /// material uses.
+  Rasterizer(const Model& model, const std::vector<std::vector<Texture>>& mip_levels, const PinholeCamera& camera,
+             const RenderSettings& settings, const Pose& T_camera_world, RenderOutput& out)
       : model_(model),
+        mip_levels_(mip_levels),
         cam_(camera),
         settings_(settings),
         out_(out),
@@ -200,7 +239,11 @@ class Rasterizer {
 
   /// Draws triangles [first, first + count) of the index buffer with one material.
   void drawRange(uint32_t first_index, uint32_t index_count, const Material& material) {
-    const Texture* tex = material.texture >= 0 ? &model_.textures[material.texture] : nullptr;
+    TextureRef tex;
+    if (material.texture >= 0) {
+      tex.base = &model_.textures[static_cast<size_t>(material.texture)];
+      tex.levels = &mip_levels_[static_cast<size_t>(material.texture)];
+    }
     const std::array<double, 3> base = {material.base_color[0], material.base_color[1], material.base_color[2]};
     for (uint32_t k = 0; k + 3 <= index_count; k += 3) {
       const uint32_t* t = &model_.indices[first_index + k];
@@ -216,6 +259,12 @@ class Rasterizer {
   }
 
  private:
+  /// A material's texture: level 0 and the levels below it; base null when untextured.
+  struct TextureRef {
+    const Texture* base = nullptr;
+    const std::vector<Texture>* levels = nullptr;
+  };
+
   ClipVertex vertex(uint32_t index) const {
     ClipVertex c;
     c.p = p_camera_[index];
@@ -229,7 +278,7 @@ class Rasterizer {
     return c;
   }
 
-  void drawTriangle(uint32_t ia, uint32_t ib, uint32_t ic, const Texture* tex, const std::array<double, 3>& base) {
+  void drawTriangle(uint32_t ia, uint32_t ib, uint32_t ic, const TextureRef& tex, const std::array<double, 3>& base) {
     const ClipVertex tri[3] = {vertex(ia), vertex(ib), vertex(ic)};
     // Face normal and plane (camera frame) of the whole triangle; see the file comment.
     const Eigen::Vector3d n = (tri[1].p - tri[0].p).cross(tri[2].p - tri[0].p);
@@ -273,7 +322,8 @@ class Rasterizer {
 
   /// Rasterizes one triangle with all vertices at z >= near.
   void rasterize(const ClipVertex& a, const ClipVertex& b, const ClipVertex& c, const Eigen::Vector3d& plane_n,
-                 double plane_d, const Eigen::Vector3f& normal, const Texture* tex, const std::array<double, 3>& base) {
+                 double plane_d, const Eigen::Vector3f& normal, const TextureRef& tex,
+                 const std::array<double, 3>& base) {
     const ClipVertex* corner[3] = {&a, &b, &c};
     ScreenVertex s[3];
     double inv_z[3];
@@ -288,6 +338,20 @@ class Rasterizer {
     if (area == 0 || !std::isfinite(area)) return;
     // Edge k is opposite corner k; its value is corner k's (unnormalised) barycentric.
     const Edge edge[3] = {makeEdge(s[1], s[2], area), makeEdge(s[2], s[0], area), makeEdge(s[0], s[1], area)};
+    // Perspective-correct texture coordinates in level-0 texels at any point of the triangle's
+    // plane (inside or not); false where the point's ray misses the plane's front.
+    auto texelsAt = [&](double pu, double pv, double st[2]) {
+      double wk[3];
+      double w_sum = 0;
+      for (int k = 0; k < 3; ++k) {
+        wk[k] = edge[k].eval(pu, pv) * inv_z[k];
+        w_sum += wk[k];
+      }
+      if (!(w_sum > 0)) return false;
+      st[0] = (wk[0] * a.attribute[0] + wk[1] * b.attribute[0] + wk[2] * c.attribute[0]) / w_sum * tex.base->width;
+      st[1] = (wk[0] * a.attribute[1] + wk[1] * b.attribute[1] + wk[2] * c.attribute[1]) / w_sum * tex.base->height;
+      return std::isfinite(st[0]) && std::isfinite(st[1]);
+    };
 
     const double u_min = std::min({s[0].u, s[1].u, s[2].u});
     const double u_max = std::max({s[0].u, s[1].u, s[2].u});
@@ -338,7 +402,17 @@ class Rasterizer {
           attr[m] = (wk[0] * a.attribute[m] + wk[1] * b.attribute[m] + wk[2] * c.attribute[m]) / w_sum;
         }
         double tex_rgb[3] = {1.0, 1.0, 1.0};
-        if (tex != nullptr) sampleBilinearRepeat(*tex, attr[0], attr[1], tex_rgb);
+        if (tex.base != nullptr) {
+          // Level of detail of the pixel's 2 x 2 quad (file comment).
+          const double x0 = i & ~1, y0 = j & ~1;
+          double st00[2], st10[2], st01[2];
+          double rho = 0;
+          if (texelsAt(x0, y0, st00) && texelsAt(x0 + 1, y0, st10) && texelsAt(x0, y0 + 1, st01)) {
+            rho = std::max(std::hypot(st10[0] - st00[0], st10[1] - st00[1]),
+                           std::hypot(st01[0] - st00[0], st01[1] - st00[1]));
+          }
+          sampleTrilinearRepeat(*tex.base, *tex.levels, attr[0], attr[1], rho, tex_rgb);
+        }
         // output = round(255 * texture * vertex colour * base colour), all plain 0..1 values.
         uint8_t* px = &out_.rgba.data[idx * 4];
         for (int ch = 0; ch < 3; ++ch) {
@@ -351,6 +425,7 @@ class Rasterizer {
   }
 
   const Model& model_;
+  const std::vector<std::vector<Texture>>& mip_levels_;
   const PinholeCamera& cam_;
   const RenderSettings& settings_;
   RenderOutput& out_;
@@ -358,10 +433,27 @@ class Rasterizer {
   std::vector<double> depth_;              ///< Camera z per pixel, +inf where empty.
 };
 
-}  // namespace
+/// Mip levels 1.. of every texture a material uses (consistent ones: see checkModel); empty for
+/// the others.
+std::vector<std::vector<Texture>> buildModelMipLevels(const Model& model) {
+  std::vector<std::vector<Texture>> levels(model.textures.size());
+  std::vector<bool> used(model.textures.size(), false);
+  for (const Material& m : model.materials) {
+    if (m.texture >= 0 && m.texture < static_cast<int>(model.textures.size()))
+      used[static_cast<size_t>(m.texture)] = true;
+  }
+  for (size_t k = 0; k < model.textures.size(); ++k) {
+    const Texture& t = model.textures[k];
+    if (used[k] && t.width > 0 && t.height > 0 && t.rgba.size() == static_cast<size_t>(t.width) * t.height * 4) {
+      levels[k] = buildMipLevels(t);
+    }
+  }
+  return levels;
+}
 
-Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& camera, const Pose& T_world_camera,
-                                     const RenderSettings& settings) {
+Result<RenderOutput> renderWithMipLevels(const Model& model, const std::vector<std::vector<Texture>>& mip_levels,
+                                         const PinholeCamera& camera, const Pose& T_world_camera,
+                                         const RenderSettings& settings) {
   if (Status valid = validateCamera(camera); !valid.ok()) return valid.error();
   if (!isValidPose(T_world_camera)) {
     return makeError(ErrorCode::kInvalidArgument, "renderReference: T_world_camera is not a finite rigid transform");
@@ -382,7 +474,7 @@ Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& ca
   if (settings.outputs & kRenderNormals) out.normals = ImageF32(w, h, 3, 0.0f);
 
   const Pose T_camera_world = T_world_camera.inverse(Eigen::Isometry);
-  Rasterizer raster(model, camera, settings, T_camera_world, out);
+  Rasterizer raster(model, mip_levels, camera, settings, T_camera_world, out);
   const Material default_material;
   auto materialOf = [&](int index) -> const Material& {
     return model.materials.empty() ? default_material : model.materials[index];
@@ -424,14 +516,23 @@ Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& ca
   return out;
 }
 
+}  // namespace
+
+Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& camera, const Pose& T_world_camera,
+                                     const RenderSettings& settings) {
+  return renderWithMipLevels(model, buildModelMipLevels(model), camera, T_world_camera, settings);
+}
+
 Result<std::unique_ptr<CpuRenderer>> CpuRenderer::create(const Model& model) {
   VKLOC_TRY_STATUS(validateModel(model));
-  return std::unique_ptr<CpuRenderer>(new CpuRenderer(std::make_shared<const Model>(model)));
+  auto copy = std::make_shared<const Model>(model);
+  auto mip_levels = std::make_shared<const std::vector<std::vector<Texture>>>(buildModelMipLevels(*copy));
+  return std::unique_ptr<CpuRenderer>(new CpuRenderer(std::move(copy), std::move(mip_levels)));
 }
 
 Result<RenderOutput> CpuRenderer::render(const PinholeCamera& camera, const Pose& T_world_camera,
                                          const RenderSettings& settings) {
-  return renderReference(*model_, camera, T_world_camera, settings);
+  return renderWithMipLevels(*model_, *mip_levels_, camera, T_world_camera, settings);
 }
 
 std::string CpuRenderer::describe() const { return "the CPU reference rasterizer"; }

@@ -89,10 +89,20 @@ struct GpuRendererOptions {
   /// Simplified levels built per block at creation (each ~1/4 of the previous triangles; see
   /// RenderSettings::lod_pixel_error). 0 builds none.
   int lod_levels = 4;
+  /// Builds texture mip levels on the host (buildMipLevels) instead of with vkCmdBlitImage, as
+  /// on devices that cannot blit the texture format with linear filtering. For testing that path
+  /// on any device.
+  bool host_mipmaps = false;
+  /// Most textures per descriptor set; 0: as many as the device allows. Models with more
+  /// textures than a set holds are drawn with one set per batch of textures, bound when a draw
+  /// needs another batch. For testing that path on any device.
+  int max_textures_per_set = 0;
 };
 
 /// Renders one model with Vulkan. Model data is uploaded once at creation; render targets are
-/// (re)allocated when the camera size changes. Used by one thread at a time.
+/// (re)allocated when the camera size changes. Any number of textures, each at its own size with
+/// a mip chain, sampled trilinearly with REPEAT wrapping (as the CPU reference renderer does).
+/// Used by one thread at a time.
 class GpuRenderer final : public Renderer {
  public:
   /// Uploads the model (vertices, indices, textures). kInvalidArgument for an invalid model,

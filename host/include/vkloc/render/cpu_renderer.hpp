@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "vkloc/core/camera.hpp"
 #include "vkloc/core/pose.hpp"
@@ -13,12 +14,15 @@
 namespace vkloc {
 
 /// CPU reference renderer: scanline rasterizer with the same conventions as the GPU renderer
-/// (pixel-centre sampling, top-left fill rule, perspective-correct attributes, bilinear
-/// repeat texture sampling, nearest depth wins). Slow; meant as a test oracle.
+/// (pixel-centre sampling, top-left fill rule, perspective-correct attributes, trilinear
+/// mip-mapped REPEAT texture sampling with a per-quad level of detail, nearest depth wins).
+/// Slow; meant as a test oracle. Builds the mip chains of the model's textures on every call
+/// (CpuRenderer builds them once).
 Result<RenderOutput> renderReference(const Model& model, const PinholeCamera& camera, const Pose& T_world_camera,
                                      const RenderSettings& settings = {});
 
-/// renderReference behind the Renderer interface, on its own copy of the model.
+/// renderReference behind the Renderer interface, on its own copy of the model and of its
+/// textures' mip chains.
 class CpuRenderer final : public Renderer {
  public:
   /// kInvalidArgument (validateModel's message) for an invalid model.
@@ -28,8 +32,11 @@ class CpuRenderer final : public Renderer {
   std::string describe() const override;
 
  private:
-  explicit CpuRenderer(std::shared_ptr<const Model> model) : model_(std::move(model)) {}
+  CpuRenderer(std::shared_ptr<const Model> model, std::shared_ptr<const std::vector<std::vector<Texture>>> mip_levels)
+      : model_(std::move(model)), mip_levels_(std::move(mip_levels)) {}
   std::shared_ptr<const Model> model_;
+  /// Levels 1.. of each of model_->textures (buildMipLevels); empty for unused textures.
+  std::shared_ptr<const std::vector<std::vector<Texture>>> mip_levels_;
 };
 
 /// A RendererFactory making CpuRenderers.
