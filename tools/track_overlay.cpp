@@ -143,7 +143,9 @@ void TrackOverlay::write(size_t index, int64_t t_ns, const ImageU8& gray, const 
                                 ratio(e.inlier_ratio), e.in_image));
   if (truth) {
     caption.push_back(
-        fmt::format("error {:.3f} m {:.2f} deg  at gt {}", t_err_m, r_err_deg, ratio(overlay->truth->inlier_ratio)));
+        fmt::format("error {} {:.2f} deg  inliers at gt {}",
+                    t_err_m < 1.0 ? fmt::format("{:.1f} mm", 1000.0 * t_err_m) : fmt::format("{:.3f} m", t_err_m),
+                    r_err_deg, ratio(overlay->truth->inlier_ratio)));
   } else {
     caption.push_back("no ground truth");
   }

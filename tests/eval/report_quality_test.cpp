@@ -81,7 +81,7 @@ TEST(ReportQuality, LeavesOutWhatIsMissing) {
   const std::string html = evalReportHtml(evaluateWith(some), {}, &fake);
   EXPECT_NE(html.find("id=\"q_inliers\""), std::string::npos);
   EXPECT_NE(html.find("\"inlier ratio\""), std::string::npos);
-  EXPECT_EQ(html.find("verification score"), std::string::npos);
+  EXPECT_EQ(html.find("\"verification score\""), std::string::npos);
   EXPECT_EQ(html.find("id=\"q_nis\""), std::string::npos);
   EXPECT_EQ(html.find("id=\"q_isigma\""), std::string::npos);
 
