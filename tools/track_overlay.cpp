@@ -54,9 +54,12 @@ std::string ratio(double v) { return fmt::format("{:.3f}", v); }
 }  // namespace
 
 void OverlayArgs::add(CLI::App& app) {
-  app.add_option("--overlay", dir,
-                 "Folder for per-frame edge overlays (frame_NNNNNN.png, overlays.csv): model edges at the estimate, "
-                 "green = within the inlier threshold of a live edge, red = not; cyan = at the ground truth");
+  app.add_option(
+      "--overlay", dir,
+      "Folder for per-frame edge overlays (frame_NNNNNN.png, overlays.csv): model edges at the estimate, "
+      "green = within the inlier threshold of a live edge, red = not; cyan = at the ground truth. Each overlay "
+      "renders the model on the CPU between frames: wall time grows, and with --keyframes worker the "
+      "worker gets more time per frame");
   app.add_option("--overlay-every", every, "With --overlay: every Nth frame")->capture_default_str();
 }
 
