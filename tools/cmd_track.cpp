@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "common.hpp"
+#include "track_overlay.hpp"
 #include "vkloc/core/atomic_file.hpp"
 #include "vkloc/core/se3.hpp"
 #include "vkloc/engine/gpu_accelerator.hpp"
@@ -38,6 +39,7 @@ struct TrackArgs {
   bool quiet = false;
   DeviceArgs device;
   bool no_vulkan = false;
+  OverlayArgs overlay;
 };
 
 std::string seconds(int64_t t_ns) {
@@ -84,6 +86,7 @@ void run(const TrackArgs& a) {
   if (context) accelerator = take(makeGpuAccelerator(context));
   auto localizer = take(Localizer::create(model, camera, options, accelerator));
   localizer->reset(T_init, v_init);
+  const auto overlay = TrackOverlay::create(a.overlay, model, camera, options, seq.groundtruth);
   const double setup_ms = msSince(t_start);
 
   const size_t first = a.start_frame;
@@ -155,6 +158,7 @@ void run(const TrackArgs& a) {
           f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used, f.quality.iterations,
           f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio, f.quality.chance_inlier_ratio,
           f.quality.scale_px, f.keyframe_id, f.keyframe_age_frames, f.keyframe_adopted ? 1 : 0)));
+      if (overlay && overlay->wanted(i)) overlay->write(i, entry.t_ns, gray, f);
       if (i == first) {
         first_frame_ms = f.total_ms;
       } else {
@@ -189,6 +193,10 @@ void run(const TrackArgs& a) {
   }
   check(traj->commit());
   check(frames->commit());
+  if (overlay) {
+    const std::string overlay_line = overlay->finish();
+    if (!a.quiet) std::printf("%s\n", overlay_line.c_str());
+  }
   const double hz = total_ms.empty() ? 0.0 : 1000.0 / median(total_ms);
 
   // Evaluation against ground truth.
@@ -272,6 +280,7 @@ void addTrackOptions(CLI::App* cmd, const std::shared_ptr<TrackArgs>& args) {
   cmd->add_flag("--no-vulkan", args->no_vulkan, "Render with the CPU reference rasterizer (slow)");
   cmd->add_flag("--quiet,-q", args->quiet, "Print only the final line");
   args->device.add(*cmd);
+  args->overlay.add(*cmd);
 }
 
 }  // namespace

@@ -460,10 +460,10 @@ TEST(EvalReport, HtmlInlinesChartJsAndEscapesInput) {
   EXPECT_NE(html.find("&lt;script&gt;alert(1)&lt;/script&gt;&amp;&quot;&#39;.txt"), std::string::npos);
   EXPECT_EQ(html.find("<b>x"), std::string::npos);
   EXPECT_EQ(html.find("<!--"), std::string::npos);
-  // Exactly the two script elements close: library and plots.
+  // Exactly the three script elements close: library, plots and the frames log's quality plots.
   size_t closes = 0;
   for (size_t at = html.find("</script"); at != std::string::npos; at = html.find("</script", at + 1)) ++closes;
-  EXPECT_EQ(closes, 2u);
+  EXPECT_EQ(closes, 3u);
   EXPECT_NE(html.find("const D={"), std::string::npos);
   EXPECT_NE(html.find("\"gt_xy\":[["), std::string::npos);
   EXPECT_NE(html.find("id=\"topview\""), std::string::npos);

@@ -265,6 +265,7 @@ Result<FrameLog> parseFrameLog(const std::string& text, const std::string& name)
   bool time_in_seconds = false;
   int state_col = -1;
   std::vector<int> stage_cols;
+  std::vector<int> value_cols;
   auto fail = [&](const std::string& what) {
     return makeError(ErrorCode::kMalformedInput, fmt::format("{}:{}: {}", name, line_no, what));
   };
@@ -286,10 +287,14 @@ Result<FrameLog> parseFrameLog(const std::string& text, const std::string& name)
         } else if (h.size() > 3 && h.compare(h.size() - 3, 3, "_ms") == 0) {
           stage_cols.push_back(static_cast<int>(c));
           log.stage_names.push_back(header[c]);
+        } else {
+          value_cols.push_back(static_cast<int>(c));
+          log.value_names.push_back(header[c]);
         }
       }
       if (time_col < 0) return fail("header has no 't_ns' (or 'timestamp') column");
       log.stage_ms.resize(stage_cols.size());
+      log.values.resize(value_cols.size());
       continue;
     }
     if (fields.size() != header.size()) {
@@ -312,9 +317,21 @@ Result<FrameLog> parseFrameLog(const std::string& text, const std::string& name)
       }
       log.stage_ms[k].push_back(v);
     }
+    for (size_t k = 0; k < value_cols.size(); ++k) {
+      double v = std::numeric_limits<double>::quiet_NaN();
+      if (!parseDouble(fields[value_cols[k]], v) || !std::isfinite(v)) v = std::numeric_limits<double>::quiet_NaN();
+      log.values[k].push_back(v);
+    }
   }
   if (header.empty()) return makeError(ErrorCode::kMalformedInput, fmt::format("{}: no header line", name));
   return log;
+}
+
+const std::vector<double>* FrameLog::column(const std::string& name) const {
+  for (size_t k = 0; k < value_names.size() && k < values.size(); ++k) {
+    if (value_names[k] == name) return &values[k];
+  }
+  return nullptr;
 }
 
 Result<FrameLog> loadFrameLog(const std::string& path) {

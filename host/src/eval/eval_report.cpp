@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "eval/report_quality.hpp"
 #include "vkloc/core/atomic_file.hpp"
 #include "vkloc/core/text.hpp"
 #include "vkloc/eval/report.hpp"
@@ -562,9 +563,11 @@ std::string evalReportHtml(const EvalResult& r, const ReportInfo& info, const st
     plot("thist", "Translation error histogram");
     plot("rhist", "Rotation error histogram");
     if (has_timing) plot("timing", "Time per frame and stage");
+    h += qualityPlotDivs(r.frame_log ? &*r.frame_log : nullptr);
     h += "</div>\n";
     h += "<script>\n" + scriptText(*chartjs_source) + "\n</script>\n";
     h += "<script>\nconst D=" + scriptJson(d) + ";\n" + kPlotScript + "</script>\n";
+    h += qualityPlotScript(r.frame_log ? &*r.frame_log : nullptr, r.t0_ns);
   }
   h += "</body>\n</html>\n";
   return h;

@@ -20,7 +20,8 @@
 //   under its own name.
 // - Every column whose name ends in `_ms` is a per-stage time in milliseconds; `total_ms` is the
 //   whole frame. Empty, "nan" or "-" fields mean "not measured" and are left out of statistics.
-// - Other columns are ignored.
+// - Every other column is kept by its name as numbers (FrameLog::values), e.g. the tracker's
+//   `inlier_ratio`; a field that is empty, "nan", "-" or not a number reads as NaN.
 #pragma once
 
 #include <Eigen/Core>
@@ -41,6 +42,11 @@ struct FrameLog {
   std::vector<std::string> state;             ///< Lower-case state per frame; empty when no column.
   std::vector<std::string> stage_names;       ///< Names of the `_ms` columns, in file order.
   std::vector<std::vector<double>> stage_ms;  ///< [stage][frame] milliseconds; NaN = not measured.
+  std::vector<std::string> value_names;       ///< Names of the other columns, in file order.
+  std::vector<std::vector<double>> values;    ///< [column][frame] numbers; NaN = none.
+
+  /// values of the column named `name` (exact match), or null when the log has no such column.
+  const std::vector<double>* column(const std::string& name) const;
 };
 
 /// Parses a frames log from text; `name` is used in messages ("name:line: what is wrong").
