@@ -760,7 +760,7 @@ TEST(ErrorStateEkf, LongRunStaysFiniteAndPositiveDefinite) {
   // 120 s of an aggressive handheld motion, noisy IMU with biases, poses at 20 Hz applied 30 ms
   // late, 5 % of them 20-sigma outliers, and a 2 s stretch without poses: every IMU-rate output
   // finite with a symmetric positive definite P; outliers rejected; position error bounded
-  // (measured max ~3 cm; 15 cm allowed).
+  // (measured max 43 mm with poses, 84 mm over the 2 s without; 100 / 300 mm allowed).
   EkfOptions o;
   o.T_body_camera = bodyCamera();
   const SplineTrajectory trajectory = makeFlight(TrajectoryKind::kAggressive, 121.0, 77);
@@ -774,9 +774,10 @@ TEST(ErrorStateEkf, LongRunStaysFiniteAndPositiveDefinite) {
   int rejected = 0;
   int checked = 0;
   double worst_m = 0.0;
+  double worst_blackout_m = 0.0;
   for (size_t k = 1; k < sim.imu.size(); ++k) {
     ASSERT_TRUE(ekf.addImu(sim.imu[k]).ok());
-    const int64_t t = sim.imu[k - 6].t_ns;
+    const int64_t t = k >= 6 ? sim.imu[k - 6].t_ns : 0;  // 30 ms late
     const bool blackout = t > 60 * kSecondNs && t < 62 * kSecondNs;
     if (k >= 6 && (k - 6) % kReadingsPerFrame == 0 && !blackout) {
       Vector6d xi = drawGaussian(rng, C);
@@ -796,18 +797,20 @@ TEST(ErrorStateEkf, LongRunStaysFiniteAndPositiveDefinite) {
       ++checked;
     }
     if (k > 400) {
-      worst_m = std::max(
-          worst_m,
-          (ekf.current().p_world_body - trajectory.evaluate(sim.imu[k].t_ns).T_world_body.translation()).norm());
+      const int64_t now = sim.imu[k].t_ns;
+      const double e = (ekf.current().p_world_body - trajectory.evaluate(now).T_world_body.translation()).norm();
+      double& worst = now > 60 * kSecondNs && now < 63 * kSecondNs ? worst_blackout_m : worst_m;
+      worst = std::max(worst, e);
     }
   }
-  std::printf("long run: %d outputs, %d outliers, %d rejected, max position error after 2 s %.1f mm\n", checked,
-              outliers, rejected, worst_m * 1e3);
+  std::printf("long run: %d outputs, %d outliers, %d rejected, max position error %.1f mm (blackout %.1f mm)\n",
+              checked, outliers, rejected, worst_m * 1e3, worst_blackout_m * 1e3);
   EXPECT_EQ(checked, static_cast<int>(sim.imu.size()) - 1);
   EXPECT_GT(outliers, 50);
   EXPECT_GE(rejected, outliers);
   EXPECT_LE(rejected, outliers + 10);
-  EXPECT_LT(worst_m, 0.15);
+  EXPECT_LT(worst_m, 0.1);
+  EXPECT_LT(worst_blackout_m, 0.3);
 }
 
 }  // namespace

@@ -563,17 +563,14 @@ Result<EkfUpdate> ErrorStateEkf::updateCameraPose(int64_t t_ns, const Pose& T_wo
   node.measurements.push_back(m);
 
   // Propagate the later readings again from the updated node, re-applying their updates, into a
-  // copy: the filter changes only when everything stayed finite.
-  std::deque<Node> rebuilt(nodes_.begin(), nodes_.begin() + static_cast<std::ptrdiff_t>(index));
-  if (!insert) {
-    rebuilt.push_back(node);
-  } else {
-    rebuilt.push_back(nodes_[index]);
-    rebuilt.push_back(node);
-  }
+  // copy of the tail: the filter changes only when everything stayed finite.
+  const size_t first = insert ? index + 1 : index;  // Where the updated node goes.
+  std::vector<Node> tail;
+  tail.reserve(nodes_.size() - index + 1);
+  tail.push_back(std::move(node));
   for (size_t j = index + 1; j < nodes_.size(); ++j) {
     Node next = nodes_[j];
-    next.state = propagate(rebuilt.back(), next.reading);
+    next.state = propagate(tail.back(), next.reading);
     for (const Measurement& earlier : next.measurements) {
       const Innovation again = innovationOf(next.state, earlier.T_world_body, earlier.covariance);
       if (!again.ok || !applyInnovation(next.state, again, earlier.covariance)) {
@@ -581,10 +578,11 @@ Result<EkfUpdate> ErrorStateEkf::updateCameraPose(int64_t t_ns, const Pose& T_wo
       }
     }
     if (!stateFinite(next.state)) return invalid(where + "re-propagation is not finite; ignored");
-    rebuilt.push_back(std::move(next));
+    tail.push_back(std::move(next));
     ++result.repropagated_steps;
   }
-  nodes_ = std::move(rebuilt);
+  nodes_.erase(nodes_.begin() + static_cast<std::ptrdiff_t>(first), nodes_.end());
+  for (Node& n : tail) nodes_.push_back(std::move(n));
   awaiting_fix_ = false;
   result.accepted = true;
   return result;
