@@ -4,7 +4,7 @@
 //   model     triangle-mesh models: loading (OBJ, PLY, glTF/GLB, Draco, ViSP .cao), writing
 //   render    the Renderer interface and the CPU reference renderer
 //   track     live edges, keyframe edge points, Gauss-Newton edge alignment, tracking backends
-//   fusion    IMU readings, integration and inertial prediction
+//   fusion    IMU readings, integration, inertial prediction and the error-state EKF
 //   localize  the Localizer and its parts (keyframes, motion prior, initializer)
 //   io        image files, sequences, calibration files
 //   engine    Vulkan: device, GPU renderer, GPU edge stages, the Accelerator of a device
@@ -25,6 +25,7 @@
 #include "vkloc/engine/gpu.hpp"
 #include "vkloc/engine/gpu_accelerator.hpp"
 #include "vkloc/engine/gpu_edges.hpp"
+#include "vkloc/fusion/error_state_ekf.hpp"
 #include "vkloc/fusion/imu_integration.hpp"
 #include "vkloc/fusion/inertial_predictor.hpp"
 #include "vkloc/fusion/sensors.hpp"
