@@ -48,6 +48,47 @@ std::string seconds(int64_t t_ns) {
   return fmt::format("{}{}.{:09d}", sign, a / 1000000000ull, a % 1000000000ull);
 }
 
+/// Errors of the filter's IMU-rate output against ground truth (interpolated: cubic Hermite in
+/// position with central-difference velocities, slerp in rotation, linear in velocity).
+struct FilterErrors {
+  std::vector<double> position_m, rotation_deg, velocity_m_s;
+};
+
+FilterErrors filterErrors(const std::vector<FilterOutput>& outputs, const std::vector<StampedPose>& gt) {
+  FilterErrors e;
+  if (gt.size() < 3) return e;
+  std::vector<Eigen::Vector3d> v(gt.size());
+  for (size_t k = 0; k < gt.size(); ++k) {
+    const size_t a = k == 0 ? 0 : k - 1, b = std::min(k + 1, gt.size() - 1);
+    const double dt = static_cast<double>(gt[b].t_ns - gt[a].t_ns) * 1e-9;
+    v[k] = (gt[b].T_world_camera.translation() - gt[a].T_world_camera.translation()) / dt;
+  }
+  size_t k = 0;
+  for (const FilterOutput& o : outputs) {
+    while (k + 1 < gt.size() && gt[k + 1].t_ns < o.t_ns) ++k;
+    if (k + 1 >= gt.size() || o.t_ns < gt[k].t_ns) continue;
+    const double h = static_cast<double>(gt[k + 1].t_ns - gt[k].t_ns) * 1e-9;
+    const double s = static_cast<double>(o.t_ns - gt[k].t_ns) * 1e-9 / h;
+    const Eigen::Vector3d p0 = gt[k].T_world_camera.translation(), p1 = gt[k + 1].T_world_camera.translation();
+    const double h00 = 2 * s * s * s - 3 * s * s + 1, h10 = s * s * s - 2 * s * s + s, h01 = -2 * s * s * s + 3 * s * s,
+                 h11 = s * s * s - s * s;
+    const Eigen::Vector3d p = h00 * p0 + h10 * h * v[k] + h01 * p1 + h11 * h * v[k + 1];
+    const Eigen::Quaterniond q = Eigen::Quaterniond(gt[k].T_world_camera.linear())
+                                     .slerp(s, Eigen::Quaterniond(gt[k + 1].T_world_camera.linear()));
+    const Eigen::Vector3d vel = (1 - s) * v[k] + s * v[k + 1];
+    e.position_m.push_back((o.T_world_camera.translation() - p).norm());
+    e.rotation_deg.push_back(rotationAngleDeg(q.toRotationMatrix().transpose() * o.T_world_camera.linear()));
+    e.velocity_m_s.push_back((o.v_world_body - vel).norm());
+  }
+  return e;
+}
+
+double rms(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x * x;
+  return v.empty() ? 0.0 : std::sqrt(s / static_cast<double>(v.size()));
+}
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
   const size_t n = v.size() / 2;
@@ -116,7 +157,13 @@ void run(const TrackArgs& a) {
   check(frames->appendLine(
       "t_ns,state,render_ms,reference_ms,live_ms,align_ms,total_ms,inlier_ratio,mean_residual_px,points,iterations,"
       "rerendered,visible_ratio,spread_ratio,chance_inlier_ratio,scale_px,keyframe_id,keyframe_age_frames,"
-      "keyframe_adopted"));
+      "keyframe_adopted,visual_rejected,ekf_nis,inertial_sigma_m"));
+  // The filter's output at the IMU rate (kEkf): camera pose, body velocity, 1-sigma figures.
+  const std::string filter_path = (out_path.parent_path() / (out_path.stem().string() + "_filter.csv")).string();
+  auto filter_out = take(PartialFileWriter::open(filter_path));
+  check(filter_out->appendLine(
+      "t_ns,tx,ty,tz,qx,qy,qz,qw,vx,vy,vz,sigma_position_m,sigma_rotation_deg,sigma_velocity_m_s"));
+  std::vector<FilterOutput> filter_outputs;
   const bool tty = isatty(fileno(stdout)) != 0 && !a.quiet;
   size_t last_decile = 0;
   std::vector<StampedPose> estimate;
@@ -153,11 +200,25 @@ void run(const TrackArgs& a) {
       }
       rerendered += f.reference_rendered;
       check(frames->appendLine(fmt::format(
-          "{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{}",
+          "{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{},{},{:."
+          "4g},"
+          "{:.4g}",
           entry.t_ns, trackingStateName(f.state), f.render_ms, f.reference_ms, f.live_ms, f.align_ms, f.total_ms,
           f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used, f.quality.iterations,
           f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio, f.quality.chance_inlier_ratio,
-          f.quality.scale_px, f.keyframe_id, f.keyframe_age_frames, f.keyframe_adopted ? 1 : 0)));
+          f.quality.scale_px, f.keyframe_id, f.keyframe_age_frames, f.keyframe_adopted ? 1 : 0,
+          f.visual_rejected ? 1 : 0, f.innovation, f.inertial_sigma_m)));
+      for (const FilterOutput& o : localizer->takeFilterOutputs()) {
+        const Eigen::Quaterniond q(o.T_world_camera.linear());
+        const Eigen::Vector3d& t = o.T_world_camera.translation();
+        check(filter_out->appendLine(
+            fmt::format("{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.6g},{:.4g},{:.4g},{:.4g}",
+                        o.t_ns, t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w(), o.v_world_body.x(), o.v_world_body.y(),
+                        o.v_world_body.z(), std::sqrt(std::max(0.0, o.covariance.topLeftCorner<3, 3>().trace())),
+                        std::sqrt(std::max(0.0, o.covariance.bottomRightCorner<3, 3>().trace())) * 180.0 / M_PI,
+                        o.sigma_velocity.norm())));
+        filter_outputs.push_back(o);
+      }
       if (overlay && overlay->wanted(i)) overlay->write(i, entry.t_ns, gray, f);
       if (i == first) {
         first_frame_ms = f.total_ms;
@@ -188,11 +249,13 @@ void run(const TrackArgs& a) {
     // Keep what was tracked, say where; the previous files at --out are untouched.
     traj->keep();
     frames->keep();
+    filter_out->keep();
     throw Failure{fmt::format("{} (the {} frames tracked before are kept in {} and {})", failure.message,
                               frames->lines() - 1, traj->partialPath(), frames->partialPath())};
   }
   check(traj->commit());
   check(frames->commit());
+  check(filter_out->commit());
   if (overlay) {
     const std::string overlay_line = overlay->finish();
     if (!a.quiet) std::printf("%s\n", overlay_line.c_str());
@@ -240,6 +303,17 @@ void run(const TrackArgs& a) {
         result.translation_m.median, result.translation_m.mean, result.translation_m.max, result.rotation_deg.median,
         result.rotation_deg.mean, result.rotation_deg.max, result.localized_fraction,
         depths.empty() ? 0.0 : result.translation_m.median / median(depths));
+    if (!filter_outputs.empty()) {
+      const FilterErrors fe = filterErrors(filter_outputs, seq.groundtruth);
+      const double span_s = static_cast<double>(filter_outputs.back().t_ns - filter_outputs.front().t_ns) * 1e-9;
+      summary += fmt::format(
+          ",\n  \"filter_outputs\": {},\n  \"filter_rate_hz\": {:.1f},\n  \"filter_position_rms_m\": {:.6g},\n"
+          "  \"filter_position_median_m\": {:.6g},\n  \"filter_rotation_rms_deg\": {:.6g},\n"
+          "  \"filter_velocity_rms_m_s\": {:.6g},\n  \"filter_velocity_median_m_s\": {:.6g}",
+          filter_outputs.size(), span_s > 0 ? static_cast<double>(filter_outputs.size() - 1) / span_s : 0.0,
+          rms(fe.position_m), median(fe.position_m), rms(fe.rotation_deg), rms(fe.velocity_m_s),
+          median(fe.velocity_m_s));
+    }
     if (!a.quiet) {
       std::fputs(formatEvalTable(result).c_str(), stdout);
       std::printf("report: %s\n", std::filesystem::absolute(html_path).string().c_str());

@@ -207,6 +207,7 @@ void setSequenceInertial(const Sequence& seq, bool use_imu, LocalizerOptions& op
   options.inertial.enabled = use_imu && !seq.imu.empty();
   options.inertial.T_body_camera = seq.camera.T_body_camera;
   options.inertial.predictor.gravity_world = seq.gravity_world;
+  if (seq.imu_noise) options.inertial.ekf.imu_noise = *seq.imu_noise;
 }
 
 size_t feedSequenceImu(const Sequence& seq, size_t next, int64_t t_ns, Localizer& localizer) {

@@ -40,7 +40,7 @@ TEST(ConstantVelocityPrior, ExtrapolatesTheLastMotion) {
   // A frame without a visual pose keeps the motion; nothing is reported for it.
   EXPECT_FALSE(prior.bridge(2 * kFrameNs, prior.predict(2 * kFrameNs), poseAt(5, 0)).has_value());
   EXPECT_TRUE(prior.lastPose()->isApprox(poseAt(0.1, 2)));
-  EXPECT_TRUE(prior.consistent(*p, poseAt(100, 90), 1.0));  // no IMU: no gate
+  EXPECT_TRUE(prior.consistent(*p, poseAt(100, 90), Matrix6d::Identity(), 1.0));  // no IMU: no gate
 }
 
 // A camera already in motion: the caller's velocity moves the first guesses until two timed
@@ -132,13 +132,13 @@ TEST(InertialPrior, PredictsFromTheImuGatesAndBridges) {
   EXPECT_LT((p->T_world_camera.translation() - truth.translation()).norm(), 0.01);
   EXPECT_GT(p->sigma_m, 0.0);
   // The gate: the truth passes, a pose 1 m off or 5 degrees turned does not.
-  EXPECT_TRUE(prior.consistent(*p, truth, 10.0));
+  EXPECT_TRUE(prior.consistent(*p, truth, Matrix6d::Identity() * 1e-6, 10.0));
   Pose off = truth;
   off.translation().x() += 1.0;
-  EXPECT_FALSE(prior.consistent(*p, off, 10.0));
+  EXPECT_FALSE(prior.consistent(*p, off, Matrix6d::Identity() * 1e-6, 10.0));
   Pose turned = truth;
   turned.linear() = truth.linear() * expSO3(Eigen::Vector3d(0, 0, 5.0 * M_PI / 180.0));
-  EXPECT_FALSE(prior.consistent(*p, turned, 10.0));
+  EXPECT_FALSE(prior.consistent(*p, turned, Matrix6d::Identity() * 1e-6, 10.0));
   // A frame without a visual pose reports the inertial one, with its uncertainty.
   const auto bridged = prior.bridge(t, p, truth);
   ASSERT_TRUE(bridged.has_value());

@@ -275,7 +275,11 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
   impl->options.reference.levels = impl->options.live.levels;
   impl->camera = camera;
   impl->initializer = Initializer(initializerOptions(options));
-  impl->motion = std::make_unique<InertialPrior>(options.inertial, options.motion);
+  if (options.inertial.filter == InertialFilter::kEkf) {
+    impl->motion = std::make_unique<EkfPrior>(options.inertial, options.motion);
+  } else {
+    impl->motion = std::make_unique<InertialPrior>(options.inertial, options.motion);
+  }
 
   std::unique_ptr<Renderer> renderer;
   if (accelerator) {
@@ -343,6 +347,8 @@ void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vec
 }
 
 Status Localizer::addImu(const ImuSample& sample) { return impl_->motion->addImu(sample); }
+
+std::vector<FilterOutput> Localizer::takeFilterOutputs() { return impl_->motion->takeOutputs(); }
 
 std::string Localizer::backendSummary() const {
   const Impl& m = *impl_;
@@ -442,7 +448,9 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   if (prediction && prediction->inertial) {
     out.inertial_sigma_m = prediction->sigma_m;
     if (track.state == TrackingState::kTracking) {
-      out.visual_rejected = !m.motion->consistent(*prediction, track.T_world_camera, keyframe.scene_depth_m);
+      out.visual_rejected =
+          !m.motion->consistent(*prediction, track.T_world_camera, track.covariance, keyframe.scene_depth_m);
+      out.innovation = m.motion->lastInnovation();
     }
   }
   if (track.state == TrackingState::kTracking && !out.visual_rejected) {

@@ -16,7 +16,11 @@ Status validateInertialAiding(const InertialAiding& ia) {
                      "Localizer: need inertial.gate_depth_ratio and gate_sigmas in 0..1e3, gate_rotation_deg in "
                      "0..180 and max_inertial_s in 0..1e4");
   }
-  return validateInertialOptions(ia.predictor);
+  VKLOC_TRY_STATUS(validateInertialOptions(ia.predictor));
+  EkfOptions ekf = ia.ekf;
+  ekf.gravity_world = ia.predictor.gravity_world;
+  ekf.T_body_camera = ia.T_body_camera;
+  return validateEkfOptions(ekf);
 }
 
 // --- ConstantVelocityPrior ----------------------------------------------------------------------
@@ -112,7 +116,7 @@ std::optional<MotionPrediction> InertialPrior::predict(int64_t t_ns) const {
   return motion_.predict(t_ns);
 }
 
-bool InertialPrior::consistent(const MotionPrediction& prediction, const Pose& T_world_camera,
+bool InertialPrior::consistent(const MotionPrediction& prediction, const Pose& T_world_camera, const Matrix6d&,
                                double scene_depth_m) const {
   if (!prediction.inertial) return true;
   // Consistency gate: the visual pose must agree with the IMU-propagated one.
@@ -149,6 +153,123 @@ void InertialPrior::reset(const std::optional<Pose>& T_world_camera,
                           const std::optional<Eigen::Vector3d>& v_world_camera) {
   predictor_.reset();  // timestamps may start over
   motion_.reset(T_world_camera, v_world_camera);
+}
+
+// --- EkfPrior -----------------------------------------------------------------------------------
+
+namespace {
+
+EkfOptions ekfOptionsOf(const InertialAiding& aiding) {
+  EkfOptions o = aiding.ekf;
+  o.gravity_world = aiding.predictor.gravity_world;
+  o.T_body_camera = aiding.T_body_camera;
+  return o;
+}
+
+}  // namespace
+
+EkfPrior::EkfPrior(const InertialAiding& aiding, MotionModel model) : aiding_(aiding), motion_(model) {
+  // Options are validated by Localizer::create (validateInertialAiding); a failure here leaves
+  // the default filter, which behaves the same with default options.
+  if (auto created = ErrorStateEkf::create(ekfOptionsOf(aiding)); created.ok()) ekf_ = std::move(created).value();
+}
+
+Status EkfPrior::addImu(const ImuSample& sample) {
+  if (!aiding_.enabled) return motion_.addImu(sample);
+  return ekf_.addImu(sample);
+}
+
+std::optional<MotionPrediction> EkfPrior::predict(int64_t t_ns) const {
+  if (aiding_.enabled && ekf_.initialized() &&
+      static_cast<double>(t_ns - last_update_t_ns_) * 1e-9 <= aiding_.max_inertial_s) {
+    Result<EkfPrediction> p = ekf_.predict(t_ns);
+    if (p.ok()) {
+      MotionPrediction out;
+      out.T_world_camera = p->T_world_camera;
+      out.inertial = true;
+      out.covariance = p->covariance_camera;
+      // Largest position sigma (the translation block is in the camera frame: its trace bounds it).
+      out.sigma_m = std::sqrt(std::max(0.0, p->covariance_camera.topLeftCorner<3, 3>().trace()));
+      return out;
+    }
+  }
+  return motion_.predict(t_ns);
+}
+
+bool EkfPrior::consistent(const MotionPrediction& prediction, const Pose& T_world_camera, const Matrix6d& covariance,
+                          double) const {
+  last_innovation_ = std::numeric_limits<double>::quiet_NaN();
+  if (!prediction.inertial || !ekf_.initialized() || ekf_.awaitingFix()) return true;
+  // The filter's own test on a copy: the same residual, Jacobian, scale, floors and threshold as
+  // the update that follows when the pose passes.
+  ErrorStateEkf trial = ekf_;
+  Result<EkfUpdate> u = trial.updateCameraPose(ekf_.newestNs(), T_world_camera, covariance, EkfGate::kGated);
+  if (!u.ok()) return true;  // cannot be tested (e.g. no reading yet at the frame's time)
+  last_innovation_ = u->mahalanobis_sq;
+  return u->accepted;
+}
+
+void EkfPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) {
+  motion_.addVisualPose(t_ns, T_world_camera, covariance);
+  if (!aiding_.enabled) return;
+  last_update_t_ns_ = t_ns;
+  if (!ekf_.initialized()) {
+    // The first trusted pose starts the filter: with the caller's velocity (tight), else an
+    // unknown one (initial_sigma_velocity_m_s) that the next poses pin down.
+    std::optional<Matrix15d> P0;
+    if (start_velocity_) {
+      const EkfOptions& o = ekf_.options();
+      Vector15d sigma;
+      sigma << Eigen::Vector3d::Constant(o.initial_sigma_position_m), Eigen::Vector3d::Constant(0.1),
+          Eigen::Vector3d::Constant(o.initial_sigma_attitude_rad),
+          Eigen::Vector3d::Constant(o.initial_sigma_gyro_bias_rad_s),
+          Eigen::Vector3d::Constant(o.initial_sigma_accel_bias_m_s2);
+      P0 = Matrix15d(sigma.cwiseAbs2().asDiagonal());
+    }
+    const Eigen::Vector3d v_body = start_velocity_ ? *start_velocity_ : Eigen::Vector3d::Zero();
+    if (!ekf_.initializeFromCamera(t_ns, T_world_camera, v_body, P0).ok()) return;
+    // The start pose is itself a measurement (its covariance tightens the initial sigmas).
+    (void)ekf_.updateCameraPose(t_ns, T_world_camera, covariance, EkfGate::kForceAccept);
+    return;
+  }
+  // The pose passed consistent()'s gate (or could not be tested): applied as is. A pose older
+  // than the newest reading is a delayed update; one newer than the readings cannot be applied.
+  const int64_t t_update = std::min(t_ns, ekf_.newestNs());
+  (void)ekf_.updateCameraPose(t_update, T_world_camera, covariance, EkfGate::kForceAccept);
+}
+
+std::optional<BridgedPose> EkfPrior::bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
+                                            const Pose& guess) {
+  motion_.bridge(t_ns, prediction, guess);
+  if (!prediction || !prediction->inertial) return std::nullopt;
+  motion_.push(t_ns, prediction->T_world_camera);
+  BridgedPose out;
+  out.T_world_camera = prediction->T_world_camera;
+  out.covariance = prediction->covariance;
+  return out;
+}
+
+void EkfPrior::reset(const std::optional<Pose>& T_world_camera, const std::optional<Eigen::Vector3d>& v_world_camera) {
+  ekf_.reset();
+  motion_.reset(T_world_camera, v_world_camera);
+  last_update_t_ns_ = 0;
+  last_innovation_ = std::numeric_limits<double>::quiet_NaN();
+  start_velocity_.reset();
+  if (v_world_camera && v_world_camera->allFinite()) start_velocity_ = *v_world_camera;
+}
+
+std::vector<FilterOutput> EkfPrior::takeOutputs() {
+  std::vector<FilterOutput> out;
+  for (const EkfState& s : ekf_.drainOutputs()) {
+    FilterOutput o;
+    o.t_ns = s.t_ns;
+    o.T_world_camera = ekf_.cameraPose(s);
+    o.v_world_body = s.v_world_body;
+    o.covariance = ekf_.cameraCovariance(s);
+    o.sigma_velocity = s.P.block<3, 3>(3, 3).diagonal().cwiseMax(0.0).cwiseSqrt();
+    out.push_back(o);
+  }
+  return out;
 }
 
 }  // namespace vkloc

@@ -12,6 +12,13 @@
 
 namespace vkloc {
 
+EdgeDetectorOptions keyframeDetector() {
+  EdgeDetectorOptions options;
+  options.noise_sigmas = 0.0;
+  options.min_high_gradient = 6.0;
+  return options;
+}
+
 using namespace track_detail;
 
 namespace {

@@ -20,9 +20,11 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "vkloc/core/camera.hpp"
 #include "vkloc/core/image.hpp"
@@ -111,7 +113,10 @@ struct LocalizationResult {
   /// kTracking: the visual alignment is trusted; kInertial: it was lost or disagreed with the
   /// IMU, T_world_camera is the inertial prediction (InertialAiding); kLost: no trusted pose.
   TrackingState state = TrackingState::kLost;
-  bool visual_rejected = false;     ///< The alignment tracked but lay outside the inertial gate.
+  bool visual_rejected = false;  ///< The alignment tracked but lay outside the inertial gate.
+  /// Squared Mahalanobis distance of the tracked pose to the filter's prediction (kEkf; NaN when
+  /// not tested: no filter yet, or the frame was not tracked). Chi-square with 6 DOF when consistent.
+  double innovation = std::numeric_limits<double>::quiet_NaN();
   double inertial_sigma_m = 0;      ///< 1-sigma of the inertial prediction, metres (0: none made).
   bool reference_rendered = false;  ///< A keyframe was made on this call (the caller waited for it).
   bool keyframe_adopted = false;    ///< Worker mode: a keyframe finished by the worker was taken up.
@@ -157,6 +162,9 @@ class Localizer {
   /// given before the frame. kInvalidArgument for a non-finite reading or a time not after the
   /// previous reading's (the reading is ignored; tracking goes on).
   Status addImu(const ImuSample& sample);
+  /// The inertial filter's states since the last call, oldest first, one per IMU reading after
+  /// the filter started (InertialFilter::kEkf; empty otherwise): the output at the IMU rate.
+  std::vector<FilterOutput> takeFilterOutputs();
   /// Forgets the motion, the IMU readings and the keyframe and restarts from T_world_camera
   /// (e.g. the known initial pose, or after relocalization). Timestamps may start over. An
   /// invalid pose is ignored (the next localize() then needs a guess). v_world_camera: the

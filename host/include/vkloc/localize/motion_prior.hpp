@@ -10,11 +10,14 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
+#include <vector>
 
 #include "vkloc/core/pose.hpp"
 #include "vkloc/core/se3.hpp"
 #include "vkloc/core/status.hpp"
+#include "vkloc/fusion/error_state_ekf.hpp"
 #include "vkloc/fusion/inertial_predictor.hpp"
 #include "vkloc/fusion/sensors.hpp"
 
@@ -26,6 +29,16 @@ enum class MotionModel {
   kLastPose,          ///< The last pose as it is.
 };
 
+/// How IMU readings and visual poses are fused.
+enum class InertialFilter {
+  /// Error-state EKF (ErrorStateEkf, seed 000 sec. IV-D): IMU propagation from the first frame
+  /// on (gyro-predicted rotation at once), visual poses as measurements with their covariance,
+  /// chi-square gate; the velocity comes from the caller (reset) or the first visual fixes.
+  kEkf,
+  /// Velocity fitted over a window of visual fixes (InertialPredictor) with a distance gate.
+  kWindowFit,
+};
+
 /// Inertial aiding, active once IMU readings are given (Localizer::addImu): the guess for a frame
 /// is the IMU-propagated pose (InertialPredictor, fed with the accepted visual poses), a visual
 /// result farther from it than the gate is rejected, and a frame whose alignment is lost or
@@ -33,7 +46,16 @@ enum class MotionModel {
 /// accepted visual pose. Gate: translation <= gate_depth_ratio x scene depth + gate_sigmas x
 /// sqrt(sigma_pred^2 + fit_rms^2) (InertialPrediction), rotation <= gate_rotation_deg.
 struct InertialAiding {
-  bool enabled = true;                    ///< Use readings given with addImu.
+  bool enabled = true;  ///< Use readings given with addImu.
+  InertialFilter filter =
+      InertialFilter::kEkf;  ///< Fusion; kEkf uses `ekf` (its gravity and T_body_camera are set from these).
+  /// kEkf: noise densities, initial sigmas, gate, buffer. An unknown start velocity is taken as
+  /// 0 with a 1-sigma of 15 m/s (a drone in flight), not the filter's default.
+  EkfOptions ekf = [] {
+    EkfOptions o;
+    o.initial_sigma_velocity_m_s = 15.0;
+    return o;
+  }();
   Pose T_body_camera = Pose::Identity();  ///< Camera frame into the body (IMU) frame, metres.
   InertialOptions predictor;              ///< Gravity, velocity-fit window, uncertainty model.
   double gate_depth_ratio = 0.005;        ///< Translation gate floor, fraction of the median scene depth.
@@ -51,6 +73,18 @@ struct MotionPrediction {
   bool inertial = false;  ///< Propagated from IMU readings (else the motion model's extrapolation).
   double sigma_m = 0;     ///< 1-sigma position error of an inertial prediction, metres (0 otherwise).
   double fit_rms_m = 0;   ///< RMS of the visual poses about the fitted motion, metres (inertial only).
+  /// Covariance of xi = [rho; phi] in the camera frame (T_true = T_world_camera expSE3(xi)), m^2
+  /// and rad^2; zero when the prior has none (only kEkf fills it).
+  Matrix6d covariance = Matrix6d::Zero();
+};
+
+/// The filter's state at one IMU reading (kEkf), for output at the IMU rate.
+struct FilterOutput {
+  int64_t t_ns = 0;
+  Pose T_world_camera = Pose::Identity();
+  Eigen::Vector3d v_world_body = Eigen::Vector3d::Zero();    ///< Velocity of the body, world frame, m/s.
+  Matrix6d covariance = Matrix6d::Zero();                    ///< Camera pose, as MotionPrediction::covariance.
+  Eigen::Vector3d sigma_velocity = Eigen::Vector3d::Zero();  ///< 1-sigma of v per world axis, m/s.
 };
 
 /// The pose a frame without a trusted visual pose reports.
@@ -69,9 +103,9 @@ class MotionPrior {
   virtual Status addImu(const ImuSample& sample) = 0;
   /// The camera pose at t_ns (after the last frame's time), or nullopt before any pose is known.
   virtual std::optional<MotionPrediction> predict(int64_t t_ns) const = 0;
-  /// Whether a trusted visual pose agrees with `prediction` (the inertial gate); `scene_depth_m`
-  /// is the keyframe's median depth (0 = unknown).
-  virtual bool consistent(const MotionPrediction& prediction, const Pose& T_world_camera,
+  /// Whether a trusted visual pose (with its alignment covariance, camera frame) agrees with
+  /// `prediction` (the inertial gate); `scene_depth_m` is the keyframe's median depth (0 = unknown).
+  virtual bool consistent(const MotionPrediction& prediction, const Pose& T_world_camera, const Matrix6d& covariance,
                           double scene_depth_m) const = 0;
   /// The frame at t_ns has a trusted visual pose with its covariance (camera frame).
   virtual void addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) = 0;
@@ -87,6 +121,11 @@ class MotionPrior {
                      const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt) = 0;
   /// The last trusted (or bridged, or reset) camera pose.
   virtual std::optional<Pose> lastPose() const = 0;
+  /// Squared Mahalanobis distance of the last visual pose checked by consistent() (NaN when the
+  /// prior has no covariance to test it with).
+  virtual double lastInnovation() const { return std::numeric_limits<double>::quiet_NaN(); }
+  /// The filter states since the last call, oldest first (IMU rate; empty for priors without one).
+  virtual std::vector<FilterOutput> takeOutputs() { return {}; }
 };
 
 /// Constant velocity (or last pose) from the last two poses.
@@ -97,7 +136,7 @@ class ConstantVelocityPrior final : public MotionPrior {
   /// kConstantVelocity: the last inter-frame motion (camera frame) scaled to the time since the
   /// last pose (up to 10 frame intervals; beyond, the last pose).
   std::optional<MotionPrediction> predict(int64_t t_ns) const override;
-  bool consistent(const MotionPrediction&, const Pose&, double) const override { return true; }
+  bool consistent(const MotionPrediction&, const Pose&, const Matrix6d&, double) const override { return true; }
   void addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) override;
   /// Keeps the last pose and its motion (the next guess extrapolates over the time since);
   /// reports nothing.
@@ -129,7 +168,8 @@ class InertialPrior final : public MotionPrior {
   /// The IMU-propagated pose while aiding is enabled, readings were given, enough visual poses
   /// were accepted and the last one is at most max_inertial_s old; else the motion model's.
   std::optional<MotionPrediction> predict(int64_t t_ns) const override;
-  bool consistent(const MotionPrediction& prediction, const Pose& T_world_camera, double scene_depth_m) const override;
+  bool consistent(const MotionPrediction& prediction, const Pose& T_world_camera, const Matrix6d& covariance,
+                  double scene_depth_m) const override;
   void addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) override;
   /// With an inertial prediction: that pose (rotation covariance of the last accepted visual
   /// pose, translation the prediction's), which also carries the motion model on.
@@ -144,6 +184,46 @@ class InertialPrior final : public MotionPrior {
   ConstantVelocityPrior motion_;
   InertialPredictor predictor_;
   Matrix6d last_covariance_ = Matrix6d::Zero();  ///< Of the last accepted visual pose.
+};
+
+/// InertialAiding with kEkf: the error-state EKF over a constant-velocity prior (which predicts
+/// before the filter has a pose, and without IMU readings). The filter starts at the first frame
+/// with a trusted pose (the reset pose's velocity, or unknown: initial_sigma_velocity_m_s), and
+/// from then on predicts every frame from the IMU, gyro rotation included.
+class EkfPrior final : public MotionPrior {
+ public:
+  EkfPrior(const InertialAiding& aiding, MotionModel model);
+  /// The filter's addImu (readings before the first pose are kept for its start); a reading
+  /// after a gap re-anchors the filter and returns its message.
+  Status addImu(const ImuSample& sample) override;
+  /// The filter's pose and covariance at t_ns (inertial) while it runs and the last accepted
+  /// visual pose is at most max_inertial_s old; else the constant-velocity prior's.
+  std::optional<MotionPrediction> predict(int64_t t_ns) const override;
+  /// Chi-square gate of the filter (EkfOptions::gate_probability) on the pose with the frame's
+  /// alignment covariance: the pose is tested as the filter's update would be (lastInnovation()).
+  bool consistent(const MotionPrediction& prediction, const Pose& T_world_camera, const Matrix6d& covariance,
+                  double scene_depth_m) const override;
+  /// Starts the filter at the first pose, else updates it with the pose (gate already passed).
+  void addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) override;
+  /// The filter's prediction (state kInertial) up to max_inertial_s after the last accepted pose.
+  std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
+                                    const Pose& guess) override;
+  void reset(const std::optional<Pose>& T_world_camera,
+             const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt) override;
+  std::optional<Pose> lastPose() const override { return motion_.lastPose(); }
+  double lastInnovation() const override { return last_innovation_; }
+  std::vector<FilterOutput> takeOutputs() override;
+
+  /// The filter (for inspection; not initialized before the first trusted pose).
+  const ErrorStateEkf& filter() const { return ekf_; }
+
+ private:
+  InertialAiding aiding_;
+  ConstantVelocityPrior motion_;
+  ErrorStateEkf ekf_;
+  std::optional<Eigen::Vector3d> start_velocity_;
+  int64_t last_update_t_ns_ = 0;
+  mutable double last_innovation_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace vkloc

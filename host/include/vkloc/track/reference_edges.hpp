@@ -51,12 +51,11 @@ struct EdgePoint {
 };
 static_assert(sizeof(EdgePoint) == 16, "EdgePoint must match a GLSL vec4");
 
-/// The edge detector's defaults without the noise floor (noise_sigmas = 0).
-inline EdgeDetectorOptions noiseFreeDetector() {
-  EdgeDetectorOptions options;
-  options.noise_sigmas = 0.0;
-  return options;
-}
+/// The edge detector of keyframe renders: a render has no sensor noise, so no noise floor;
+/// instead an absolute floor on the high threshold (gray levels per pixel, Sobel / 8: a step of
+/// twice that many gray levels) keeps the faint shading of nearly plain textures (painted
+/// walls, plaster) out of the keyframe: a camera image does not show it above its own noise.
+EdgeDetectorOptions keyframeDetector();
 
 /// How reference edges are taken from a rendered view.
 struct ReferenceEdgeOptions {
@@ -70,13 +69,11 @@ struct ReferenceEdgeOptions {
   /// the rim of a hole in the model (not visible in live images); it and the texture edges
   /// within one pixel of it are dropped. 0 = keep every occlusion edge.
   int hole_gap_px = 24;
-  /// Texture edge detector (as for live images, without the noise floor: renders have no sensor
-  /// noise, and the floor would take their finest texture for it).
-  EdgeDetectorOptions detector = noiseFreeDetector();
-  int cell_px = 16;             ///< Subsampling grid cell side, pixels.
-  int max_points_per_cell = 6;  ///< At most this many points per cell.
-  int max_points = 4000;        ///< Total budget of points per level (> 0).
-  int levels = 3;               ///< Pyramid levels of buildEdgeReference (1..8), as the live frame's.
+  EdgeDetectorOptions detector = keyframeDetector();  ///< Texture edge detector (keyframeDetector).
+  int cell_px = 16;                                   ///< Subsampling grid cell side, pixels.
+  int max_points_per_cell = 6;                        ///< At most this many points per cell.
+  int max_points = 4000;                              ///< Total budget of points per level (> 0).
+  int levels = 3;  ///< Pyramid levels of buildEdgeReference (1..8), as the live frame's.
   /// Run the per-level tasks of buildEdgeReference on OpenCV's thread pool; false runs them on
   /// the calling thread (a background keyframe worker, which must leave the pool to the
   /// tracking thread). The points are the same either way.
