@@ -74,6 +74,17 @@ PinholeCamera CameraArgs::get() const {
 }
 
 void LocalizerArgs::add(CLI::App& app) {
+  app.add_option("--filter", filter, "Inertial fusion: ekf (error-state EKF) | window (velocity fit over fixes)")
+      ->check(CLI::IsMember({"ekf", "window"}))
+      ->capture_default_str();
+  app.add_option("--max-search-level", max_search_level,
+                 "Deepest pyramid level the filter's uncertainty may start an alignment at (0 = off)")
+      ->check(CLI::Range(0, 7))
+      ->capture_default_str();
+  app.add_option("--visual-covariance-scale", visual_covariance_scale,
+                 "Factor on the alignment's covariance in the filter (its calibration)")
+      ->check(CLI::Range(1e-3, 1e6))
+      ->capture_default_str();
   app.add_option("--backend", backend, "Live edges + alignment: auto | vulkan | cpu")
       ->check(CLI::IsMember({"auto", "vulkan", "cpu"}))
       ->capture_default_str();
@@ -90,10 +101,24 @@ void LocalizerArgs::apply(LocalizerOptions& options) const {
   options.backend = take(parseLocalizerBackend(backend));
   options.policy = take(parseRerenderPolicy(policy));
   options.keyframe_threading = take(parseKeyframeThreading(keyframes));
+  options.inertial.filter = filter == "window" ? InertialFilter::kWindowFit : InertialFilter::kEkf;
+  options.max_search_level = max_search_level;
+  options.inertial.ekf.measurement_covariance_scale = visual_covariance_scale;
 }
 
 std::vector<std::string> LocalizerArgs::arguments() const {
-  return {"--backend", backend, "--policy", policy, "--keyframes", keyframes};
+  return {"--backend",
+          backend,
+          "--policy",
+          policy,
+          "--keyframes",
+          keyframes,
+          "--filter",
+          filter,
+          "--max-search-level",
+          std::to_string(max_search_level),
+          "--visual-covariance-scale",
+          fmt::format("{:g}", visual_covariance_scale)};
 }
 
 void DeviceArgs::add(CLI::App& app) {

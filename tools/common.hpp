@@ -58,6 +58,9 @@ struct LocalizerArgs {
   std::string backend = "auto";
   std::string policy = "when-needed";
   std::string keyframes = "worker";
+  std::string filter = "ekf";  ///< Inertial fusion: ekf | window.
+  int max_search_level = LocalizerOptions{}.max_search_level;
+  double visual_covariance_scale = InertialAiding{}.ekf.measurement_covariance_scale;
   void add(CLI::App& app);
   /// Sets the options' backend, policy and keyframe threading; throws Failure on a bad value.
   void apply(LocalizerOptions& options) const;

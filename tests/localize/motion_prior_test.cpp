@@ -189,3 +189,91 @@ TEST(InertialAiding, OptionsOutOfRangeAreErrors) {
 
 }  // namespace
 }  // namespace vkloc
+
+namespace vkloc {
+namespace {
+
+// The EKF prior: from the first frame on, the gyro predicts the rotation and, with the
+// caller's velocity, the IMU the position; unknown velocity is pinned down by the next poses.
+// The chi-square gate passes the truth and refuses a pose 1 m off; a frame without a pose is
+// bridged by the filter with its covariance, and the filter's states come out at the IMU rate.
+TEST(EkfPrior, PredictsFromTheFirstFrameGatesBridgesAndOutputsAtTheImuRate) {
+  const Flight f = flight();
+  for (bool velocity_given : {true, false}) {
+    SCOPED_TRACE(velocity_given ? "velocity given" : "velocity unknown");
+    InertialAiding aiding;
+    aiding.predictor.gravity_world = Eigen::Vector3d(0, 0, -9.81);
+    EkfPrior prior(aiding, MotionModel::kConstantVelocity);
+    const int64_t t0 = f.trajectory.startNs();
+    const TrajectoryState start = f.trajectory.evaluate(t0);
+    prior.reset(start.T_world_body, velocity_given ? std::optional<Eigen::Vector3d>(start.v_world_body) : std::nullopt);
+    size_t next = 0;
+    auto feed = [&](int64_t t) {
+      for (; next < f.imu.size() && f.imu[next].t_ns <= t; ++next) ASSERT_TRUE(prior.addImu(f.imu[next]).ok());
+    };
+    const Matrix6d visual = Matrix6d::Identity() * 1e-6;  // 1 mm, 1 mrad
+    feed(t0);
+    prior.setSceneDepth(10.0);
+    prior.addVisualPose(t0, start.T_world_body, visual);
+    int64_t t = t0 + kFrameNs;
+    feed(t);
+    auto p = prior.predict(t);
+    ASSERT_TRUE(p.has_value());
+    EXPECT_TRUE(p->inertial);
+    const Pose truth1 = f.trajectory.evaluate(t).T_world_body;
+    // The rotation comes from the gyro at once.
+    EXPECT_LT(rotationAngleDeg(p->T_world_camera.linear().transpose() * truth1.linear()), 0.01);
+    const double err1 = (p->T_world_camera.translation() - truth1.translation()).norm();
+    if (velocity_given) EXPECT_LT(err1, 0.01);
+    EXPECT_TRUE(prior.consistent(*p, truth1, visual, 10.0)) << prior.lastInnovation();
+    EXPECT_TRUE(std::isfinite(prior.lastInnovation()));
+    prior.addVisualPose(t, truth1, visual);
+    // A second of poses: the velocity is known either way.
+    for (int i = 0; i < 20; ++i) {
+      t += kFrameNs;
+      feed(t);
+      prior.addVisualPose(t, f.trajectory.evaluate(t).T_world_body, visual);
+    }
+    t += kFrameNs;
+    feed(t);
+    p = prior.predict(t);
+    ASSERT_TRUE(p.has_value());
+    const Pose truth = f.trajectory.evaluate(t).T_world_body;
+    EXPECT_LT((p->T_world_camera.translation() - truth.translation()).norm(), 0.005);
+    Pose off = truth;
+    off.translation().x() += 1.0;
+    EXPECT_FALSE(prior.consistent(*p, off, visual, 10.0));
+    EXPECT_GT(prior.lastInnovation(), prior.filter().gateThreshold());
+    const auto bridged = prior.bridge(t, p, truth);
+    ASSERT_TRUE(bridged.has_value());
+    EXPECT_TRUE(bridged->T_world_camera.isApprox(p->T_world_camera));
+    EXPECT_GT(bridged->covariance(0, 0), 0.0);
+    const std::vector<FilterOutput> outputs = prior.takeOutputs();
+    ASSERT_GT(outputs.size(), 150u);  // 200 Hz over ~1.1 s
+    for (size_t i = 1; i < outputs.size(); ++i) EXPECT_GT(outputs[i].t_ns, outputs[i - 1].t_ns);
+    const TrajectoryState last = f.trajectory.evaluate(outputs.back().t_ns);
+    EXPECT_LT((outputs.back().v_world_body - last.v_world_body).norm(), 0.05);
+    EXPECT_TRUE(prior.takeOutputs().empty());
+  }
+}
+
+// Without IMU readings the EKF prior is the constant-velocity prior.
+TEST(EkfPrior, WithoutReadingsItIsTheConstantVelocityPrior) {
+  InertialAiding aiding;
+  EkfPrior prior(aiding, MotionModel::kConstantVelocity);
+  ConstantVelocityPrior plain;
+  prior.reset(poseAt(0, 0));
+  plain.reset(poseAt(0, 0));
+  for (int i = 0; i < 3; ++i) {
+    prior.addVisualPose(i * kFrameNs, poseAt(0.1 * i, i), Matrix6d::Identity());
+    plain.addVisualPose(i * kFrameNs, poseAt(0.1 * i, i), Matrix6d::Identity());
+  }
+  const auto a = prior.predict(3 * kFrameNs), b = plain.predict(3 * kFrameNs);
+  ASSERT_TRUE(a && b);
+  EXPECT_FALSE(a->inertial);
+  EXPECT_TRUE(a->T_world_camera.isApprox(b->T_world_camera, 1e-12));
+  EXPECT_FALSE(prior.bridge(3 * kFrameNs, a, poseAt(5, 0)).has_value());
+}
+
+}  // namespace
+}  // namespace vkloc

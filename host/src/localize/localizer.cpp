@@ -45,6 +45,12 @@ Status validateOptions(const LocalizerOptions& o) {
   if (!finiteIn(r.min_inlier_ratio, 0.0, 1.0)) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.min_inlier_ratio must be in 0..1");
   }
+  if (o.max_search_level < 0 || o.max_search_level > 7 || !finiteIn(o.search_sigmas, 0.0, 100.0) ||
+      !finiteIn(o.search_basin_px, 0.1, 1e4)) {
+    return makeError(
+        ErrorCode::kInvalidArgument,
+        "Localizer: need max_search_level in 0..7, search_sigmas in 0..100 and search_basin_px in 0.1..1e4");
+  }
   if (!finiteIn(o.max_point_motion_px, 0.0, 1e6)) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: max_point_motion_px must be in 0..1e6");
   }
@@ -146,8 +152,23 @@ struct Localizer::Impl {
   std::optional<int64_t> last_t_ns;  ///< Last frame given to localize.
   int64_t frame_index = -1;          ///< Frames given to localize since create.
   bool tracked_since_reset = false;  ///< A frame was tracked since create/reset.
-  bool live_ready = false;           ///< The active backend holds the current image's live frame.
-  uint64_t uploaded_id = 0;          ///< Id of the keyframe the backends hold (setKeyframe; 0: none).
+  int search_level = 0;              ///< This frame's alignment starts at least this deep (searchLevel).
+
+  /// Pyramid level whose basin covers the prediction's uncertainty (LocalizerOptions::max_search_level).
+  int searchLevel(const std::optional<MotionPrediction>& prediction, double scene_depth_m) const {
+    if (!prediction || !prediction->inertial || options.max_search_level <= 0) return 0;
+    const Matrix6d& C = prediction->covariance;
+    const double sigma_t = std::sqrt(std::max({C(0, 0), C(1, 1), 0.0}));  // across the view, m
+    const double sigma_r = std::sqrt(std::max({C(3, 3), C(4, 4), 0.0}));  // about x and y, rad
+    const double depth = scene_depth_m > 0 ? scene_depth_m : 1.0;
+    const double sigma_px = std::max(camera.fx, camera.fy) * (sigma_t / depth + sigma_r);
+    const double ratio = options.search_sigmas * sigma_px / options.search_basin_px;
+    if (!(ratio > 1.0)) return 0;
+    const int level = static_cast<int>(std::ceil(std::log2(ratio)));
+    return std::clamp(level, 0, std::min(options.max_search_level, options.live.levels - 1));
+  }
+  bool live_ready = false;   ///< The active backend holds the current image's live frame.
+  uint64_t uploaded_id = 0;  ///< Id of the keyframe the backends hold (setKeyframe; 0: none).
   // Worker mode: running means of a keyframe's making time and of a frame's time on the
   // caller's thread (ms), and the last frame interval (ns), for the request's lead.
   double keyframe_ms_mean = 0;
@@ -202,7 +223,14 @@ struct Localizer::Impl {
     if (options.max_point_motion_px > 0 && last_pose && tracked_since_reset) {
       slow = slowPoints(reference, start, *last_pose, options.max_point_motion_px);
     }
-    Result<TrackResult> r = backend.align(slow ? *slow : reference, start, options.tracker);
+    EdgeTrackerOptions tracker = options.tracker;
+    if (search_level > 0) {
+      tracker.coarsest_level = std::max(tracker.coarsest_level, search_level);
+      if (tracker.far_first_coarsest_level >= 0) {
+        tracker.far_first_coarsest_level = std::max(tracker.far_first_coarsest_level, search_level);
+      }
+    }
+    Result<TrackResult> r = backend.align(slow ? *slow : reference, start, tracker);
     out.align_ms += msSince(t0);
     return r;
   }
@@ -271,6 +299,9 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
   if (t.coarsest_level >= 0 && (t.far_first_depth_quantile <= 0 || t.far_first_coarsest_level >= 0)) {
     const int deepest = std::max(t.coarsest_level, t.far_first_depth_quantile > 0 ? t.far_first_coarsest_level : 0);
     impl->options.live.levels = std::min(options.live.levels, std::max(deepest, t.finest_level) + 1);
+  }
+  if (options.inertial.enabled && options.inertial.filter == InertialFilter::kEkf && options.max_search_level > 0) {
+    impl->options.live.levels = std::max(impl->options.live.levels, std::min(8, options.max_search_level + 1));
   }
   impl->options.reference.levels = impl->options.live.levels;
   impl->camera = camera;
@@ -412,7 +443,11 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   if (make_now) VKLOC_TRY_STATUS(m.makeKeyframe(guess, t_ns, out));
   if (m.calibration_pending) VKLOC_TRY_STATUS(m.calibrate(gray, guess));
 
-  // 3. Tracking: live stages and alignment against the keyframe.
+  // 3. Tracking: live stages and alignment against the keyframe, as deep as the prior's
+  // uncertainty asks.
+  m.search_level =
+      m.searchLevel(T_world_camera_guess ? std::nullopt : prediction, m.keyframes->current()->scene_depth_m);
+  out.search_level = m.search_level;
   m.live_ready = false;
   auto alignFrom = [&](const Pose& start) { return m.align(*m.active, gray, start, out, m.live_ready); };
   Result<TrackResult> aligned = alignFrom(guess);
@@ -454,6 +489,7 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
     }
   }
   if (track.state == TrackingState::kTracking && !out.visual_rejected) {
+    m.motion->setSceneDepth(keyframe.scene_depth_m);
     m.motion->addVisualPose(t_ns, track.T_world_camera, track.covariance);
     m.keyframes->frameTracked(track.quality);
     m.tracked_since_reset = true;

@@ -11,10 +11,11 @@ Status validateInertialAiding(const InertialAiding& ia) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: inertial.T_body_camera is not a finite rigid transform");
   }
   if (!finiteIn(ia.gate_depth_ratio, 0.0, 1e3) || !finiteIn(ia.gate_sigmas, 0.0, 1e3) ||
-      !finiteIn(ia.gate_rotation_deg, 0.0, 180.0) || !finiteIn(ia.max_inertial_s, 0.0, 1e4)) {
+      !finiteIn(ia.gate_rotation_deg, 0.0, 180.0) || !finiteIn(ia.max_inertial_s, 0.0, 1e4) ||
+      !finiteIn(ia.unknown_velocity_depths_per_s, 0.0, 1e3)) {
     return makeError(ErrorCode::kInvalidArgument,
                      "Localizer: need inertial.gate_depth_ratio and gate_sigmas in 0..1e3, gate_rotation_deg in "
-                     "0..180 and max_inertial_s in 0..1e4");
+                     "0..180, max_inertial_s in 0..1e4 and unknown_velocity_depths_per_s in 0..1e3");
   }
   VKLOC_TRY_STATUS(validateInertialOptions(ia.predictor));
   EkfOptions ekf = ia.ekf;
@@ -176,7 +177,10 @@ EkfPrior::EkfPrior(const InertialAiding& aiding, MotionModel model) : aiding_(ai
 
 Status EkfPrior::addImu(const ImuSample& sample) {
   if (!aiding_.enabled) return motion_.addImu(sample);
-  return ekf_.addImu(sample);
+  Status status = ekf_.addImu(sample);
+  // A reading the filter took (a gap is reported but used) makes it the prior from now on.
+  if (status.ok() || ekf_.newestNs() == sample.t_ns) has_imu_ = true;
+  return status;
 }
 
 std::optional<MotionPrediction> EkfPrior::predict(int64_t t_ns) const {
@@ -211,16 +215,20 @@ bool EkfPrior::consistent(const MotionPrediction& prediction, const Pose& T_worl
 
 void EkfPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) {
   motion_.addVisualPose(t_ns, T_world_camera, covariance);
-  if (!aiding_.enabled) return;
+  if (!aiding_.enabled || !has_imu_) return;
   last_update_t_ns_ = t_ns;
   if (!ekf_.initialized()) {
     // The first trusted pose starts the filter: with the caller's velocity (tight), else an
     // unknown one (initial_sigma_velocity_m_s) that the next poses pin down.
     std::optional<Matrix15d> P0;
-    if (start_velocity_) {
-      const EkfOptions& o = ekf_.options();
+    const EkfOptions& o = ekf_.options();
+    double sigma_v = start_velocity_ ? 0.1 : o.initial_sigma_velocity_m_s;
+    if (!start_velocity_ && scene_depth_m_ > 0 && aiding_.unknown_velocity_depths_per_s > 0) {
+      sigma_v = std::max(0.5, aiding_.unknown_velocity_depths_per_s * scene_depth_m_);
+    }
+    {
       Vector15d sigma;
-      sigma << Eigen::Vector3d::Constant(o.initial_sigma_position_m), Eigen::Vector3d::Constant(0.1),
+      sigma << Eigen::Vector3d::Constant(o.initial_sigma_position_m), Eigen::Vector3d::Constant(sigma_v),
           Eigen::Vector3d::Constant(o.initial_sigma_attitude_rad),
           Eigen::Vector3d::Constant(o.initial_sigma_gyro_bias_rad_s),
           Eigen::Vector3d::Constant(o.initial_sigma_accel_bias_m_s2);
@@ -249,8 +257,14 @@ std::optional<BridgedPose> EkfPrior::bridge(int64_t t_ns, const std::optional<Mo
   return out;
 }
 
+void EkfPrior::setSceneDepth(double depth_m) {
+  if (std::isfinite(depth_m) && depth_m > 0 && scene_depth_m_ <= 0) scene_depth_m_ = depth_m;
+}
+
 void EkfPrior::reset(const std::optional<Pose>& T_world_camera, const std::optional<Eigen::Vector3d>& v_world_camera) {
+  scene_depth_m_ = 0;
   ekf_.reset();
+  has_imu_ = false;
   motion_.reset(T_world_camera, v_world_camera);
   last_update_t_ns_ = 0;
   last_innovation_ = std::numeric_limits<double>::quiet_NaN();

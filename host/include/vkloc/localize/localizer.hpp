@@ -98,6 +98,15 @@ struct LocalizerOptions {
   /// wrong ones.
   double max_point_motion_px = 40.0;
   InertialAiding inertial;  ///< IMU-propagated guesses and consistency gate (when readings are given).
+  /// The prior's uncertainty sets how far the alignment searches: with a covariance (kEkf), a
+  /// frame's alignment starts at the pyramid level where search_sigmas x the predicted 1-sigma
+  /// image displacement (translation across the view at the keyframe's median depth, and
+  /// rotation) is at most search_basin_px pixels of that level, up to max_search_level (the live
+  /// pyramid is built that deep when the filter runs; 0 = never deeper than the tracker's own
+  /// coarsest levels). A start with an unknown velocity thus searches coarse, a settled filter fine.
+  int max_search_level = 2;
+  double search_sigmas = 3.0;
+  double search_basin_px = 6.0;
   /// With kAuto and an Accelerator: time the CPU and device live stages + alignment on the
   /// first frame and keep the faster one (instead of deciding by the device type alone).
   bool calibrate_backend = false;
@@ -126,6 +135,7 @@ struct LocalizationResult {
   /// made for a frame still to come).
   int64_t keyframe_age_frames = 0;
   int reference_points = 0;  ///< Edge points of the finest keyframe level.
+  int search_level = 0;      ///< Deepest pyramid level the prior's uncertainty made the alignment start at.
   double scene_depth_m = 0;  ///< Median depth of the keyframe render's surfaces, metres (0: none seen).
   double render_ms = 0;      ///< Rendering keyframes on this call, ms (0 when none was made here).
   double reference_ms = 0;   ///< Extracting their edge points, ms.
