@@ -1,0 +1,90 @@
+# Accuracy of `vkloc track` on the development sequences rendered by another renderer (Blender
+# Cycles: ../shared/data/cycles-city, cycles-room; VKLOC_DEVSET_DIR). Arguments: -DVKLOC=path
+# -DWORK=dir -DDATA=dir -DCASE=name.
+#   city, room    whole sequence from the first ground-truth pose, keyframes on the worker thread
+#                 and made synchronously: no frame lost, no reported pose beyond 2 % of the median
+#                 scene depth, median translation <= 0.3 % of it, median rotation <= 0.2 deg
+#   city_starts, room_starts  from every 10th frame at its ground-truth pose with no velocity,
+#                 20 frames each (synchronous keyframes): every start tracks all 20 frames with
+#                 every error <= 2 % of the median scene depth
+# Exit code 77 (skip) when the sequences are not there.
+cmake_minimum_required(VERSION 3.22)
+include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
+
+function(json_number var file key)
+  file(READ ${file} text)
+  string(JSON value ERROR_VARIABLE error GET "${text}" ${key})
+  if(error)
+    message(FATAL_ERROR "${file}: no '${key}': ${error}")
+  endif()
+  set(${var} ${value} PARENT_SCOPE)
+endfunction()
+
+string(REGEX REPLACE "_starts$" "" scene "${CASE}")
+set(seq ${DATA}/cycles-${scene})
+if(NOT EXISTS ${seq}/sequence.yaml)
+  message(STATUS "skipped: no development sequence at ${seq}")
+  cmake_language(EXIT 77)
+endif()
+
+set(failures "")
+if(CASE MATCHES "_starts$")
+  set(passed 0)
+  set(count 0)
+  foreach(start 0 10 20 30 40 50 60 70 80 90 100)
+    set(dir ${WORK}/${CASE}_${start})
+    file(REMOVE_RECURSE ${dir})
+    run("start ${start}" ${VKLOC} track --sequence ${seq} --out ${dir}/t.txt --report ${dir}/report --keyframes sync
+        --start-frame ${start} --max-frames 20 --quiet)
+    set(j ${dir}/report/track.json)
+    json_number(lost ${j} lost)
+    json_number(depth ${j} scene_depth_median_m)
+    json_number(tmax ${j} translation_max_m)
+    math(EXPR count "${count} + 1")
+    # CMake has no floating point: awk compares.
+    execute_process(COMMAND awk "BEGIN { print (${lost} == 0 && ${tmax} <= 0.02 * ${depth}) ? 1 : 0 }"
+                    OUTPUT_VARIABLE ok OUTPUT_STRIP_TRAILING_WHITESPACE)
+    message(STATUS "${CASE} start ${start}: lost ${lost}, largest error ${tmax} m, scene depth ${depth} m: "
+                   "${ok}")
+    if(ok)
+      math(EXPR passed "${passed} + 1")
+    else()
+      string(APPEND failures "start ${start}: lost ${lost}, largest error ${tmax} m (depth ${depth} m)\n")
+    endif()
+  endforeach()
+  message(STATUS "${CASE}: ${passed} of ${count} starts tracked all 20 frames within 2 % of the depth")
+else()
+  foreach(mode worker sync)
+    set(dir ${WORK}/${CASE}_${mode})
+    file(REMOVE_RECURSE ${dir})
+    run("track ${CASE} ${mode}" ${VKLOC} track --sequence ${seq} --out ${dir}/t.txt --report ${dir}/report
+        --keyframes ${mode} --quiet)
+    set(j ${dir}/report/track.json)
+    foreach(key frames lost inertial visual_rejected scene_depth_median_m translation_median_m translation_max_m
+                rotation_median_deg rotation_max_deg hz_median filter_rate_hz filter_position_rms_m
+                filter_rotation_rms_deg filter_velocity_median_m_s)
+      json_number(${key} ${j} ${key})
+    endforeach()
+    message(STATUS "${CASE} ${mode}: ${frames} frames, lost ${lost}, inertial only ${inertial} (rejected by the "
+                   "gate ${visual_rejected}), translation median ${translation_median_m} m max ${translation_max_m} m, "
+                   "rotation median ${rotation_median_deg} deg max ${rotation_max_deg} deg, scene depth "
+                   "${scene_depth_median_m} m, ${hz_median} Hz; filter at ${filter_rate_hz} Hz: position RMS "
+                   "${filter_position_rms_m} m, rotation RMS ${filter_rotation_rms_deg} deg, velocity median "
+                   "${filter_velocity_median_m_s} m/s")
+    execute_process(
+      COMMAND awk "BEGIN { d = ${scene_depth_median_m}; bad = \"\";
+        if (${lost} != 0) bad = bad \" lost ${lost};\";
+        if (${translation_max_m} > 0.02 * d) bad = bad \" largest error ${translation_max_m} m > 2 % of depth;\";
+        if (${translation_median_m} > 0.003 * d) bad = bad \" median ${translation_median_m} m > 0.3 % of depth;\";
+        if (${rotation_median_deg} > 0.2) bad = bad \" median rotation ${rotation_median_deg} deg > 0.2;\";
+        if (${filter_rate_hz} < 100) bad = bad \" filter output ${filter_rate_hz} Hz < 100;\";
+        print bad }"
+      OUTPUT_VARIABLE bad OUTPUT_STRIP_TRAILING_WHITESPACE)
+    if(NOT bad STREQUAL "")
+      string(APPEND failures "${mode}:${bad}\n")
+    endif()
+  endforeach()
+endif()
+if(NOT failures STREQUAL "")
+  message(FATAL_ERROR "${CASE}: requirements not met:\n${failures}")
+endif()
