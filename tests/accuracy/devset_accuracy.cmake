@@ -11,15 +11,6 @@
 cmake_minimum_required(VERSION 3.22)
 include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
 
-function(json_number var file key)
-  file(READ ${file} text)
-  string(JSON value ERROR_VARIABLE error GET "${text}" ${key})
-  if(error)
-    message(FATAL_ERROR "${file}: no '${key}': ${error}")
-  endif()
-  set(${var} ${value} PARENT_SCOPE)
-endfunction()
-
 string(REGEX REPLACE "_starts$" "" scene "${CASE}")
 set(seq ${DATA}/cycles-${scene})
 if(NOT EXISTS ${seq}/sequence.yaml)

@@ -9,15 +9,6 @@
 cmake_minimum_required(VERSION 3.22)
 include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
 
-function(json_number var file key)
-  file(READ ${file} text)
-  string(JSON value ERROR_VARIABLE error GET "${text}" ${key})
-  if(error)
-    message(FATAL_ERROR "${file}: no '${key}': ${error}")
-  endif()
-  set(${var} ${value} PARENT_SCOPE)
-endfunction()
-
 # Tracks `seq` and checks the figures; appends a failure line to the parent's `failures`.
 function(track_and_check label seq policy mode extra)
   set(dir ${WORK}/${label}_${policy}_${mode})

@@ -25,3 +25,13 @@ function(run_fails what pattern)
     message(FATAL_ERROR "${what}: expected a failure matching '${pattern}', got ${rc}:\n${out}\n${err}")
   endif()
 endfunction()
+
+# Sets `var` to the value of `key` in the JSON file `file`; fails naming both when it is missing.
+function(json_number var file key)
+  file(READ ${file} text)
+  string(JSON value ERROR_VARIABLE error GET "${text}" ${key})
+  if(error)
+    message(FATAL_ERROR "${file}: no '${key}': ${error}")
+  endif()
+  set(${var} ${value} PARENT_SCOPE)
+endfunction()
