@@ -1,4 +1,4 @@
-# Accuracy of `vkloc track` on the development sequences rendered by another renderer (Blender
+# Accuracy of `vkloc track --filter ekf` on the development sequences rendered by another renderer (Blender
 # Cycles: ../shared/data/cycles-city, cycles-room; VKLOC_DEVSET_DIR). Arguments: -DVKLOC=path
 # -DWORK=dir -DDATA=dir -DCASE=name.
 #   city, room    whole sequence from the first ground-truth pose, keyframes on the worker thread
@@ -26,7 +26,7 @@ if(CASE MATCHES "_starts$")
     set(dir ${WORK}/${CASE}_${start})
     file(REMOVE_RECURSE ${dir})
     run("start ${start}" ${VKLOC} track --sequence ${seq} --out ${dir}/t.txt --report ${dir}/report --keyframes sync
-        --start-frame ${start} --max-frames 20 --quiet)
+        --start-frame ${start} --max-frames 20 --filter ekf --quiet)
     set(j ${dir}/report/track.json)
     json_number(lost ${j} lost)
     json_number(depth ${j} scene_depth_median_m)
@@ -49,7 +49,7 @@ else()
     set(dir ${WORK}/${CASE}_${mode})
     file(REMOVE_RECURSE ${dir})
     run("track ${CASE} ${mode}" ${VKLOC} track --sequence ${seq} --out ${dir}/t.txt --report ${dir}/report
-        --keyframes ${mode} --quiet)
+        --keyframes ${mode} --filter ekf --quiet)
     set(j ${dir}/report/track.json)
     foreach(key frames lost inertial visual_rejected scene_depth_median_m translation_median_m translation_max_m
                 rotation_median_deg rotation_max_deg hz_median filter_rate_hz filter_position_rms_m
