@@ -558,7 +558,13 @@ TEST(ErrorStateEkf, GateRejectsTenSigmaAndAcceptsOneSigma) {
   const Matrix6d S = probe->innovation_covariance;
   Vector6d outlier = Vector6d::Zero();
   outlier(0) = 10.0 * std::sqrt(S(0, 0));
+  // testCameraPose decides as the update would, and changes nothing.
+  const Result<EkfUpdate> tested = fresh.testCameraPose(kSecondNs, cameraAt(outlier), scene.C);
+  ASSERT_TRUE(tested.ok());
+  EXPECT_FALSE(tested->accepted);
+  expectStatesNear(fresh.current(), x, 0.0 + 1e-15);
   const Result<EkfUpdate> rejected = fresh.updateCameraPose(kSecondNs, cameraAt(outlier), scene.C);
+  EXPECT_DOUBLE_EQ(tested->mahalanobis_sq, rejected->mahalanobis_sq);
   ASSERT_TRUE(rejected.ok());
   EXPECT_FALSE(rejected->accepted);
   EXPECT_GE(rejected->mahalanobis_sq, 100.0 - 1e-6);
@@ -567,7 +573,11 @@ TEST(ErrorStateEkf, GateRejectsTenSigmaAndAcceptsOneSigma) {
   // One sigma: r = L u with |u| = 1 (S = L L^T) gives d^2 ~= 1.
   const Eigen::LLT<Matrix6d> llt(S);
   const Vector6d u = Vector6d::Constant(1.0 / std::sqrt(6.0));
+  const Result<EkfUpdate> tested_one = fresh.testCameraPose(kSecondNs, cameraAt(llt.matrixL() * u), scene.C);
+  ASSERT_TRUE(tested_one.ok());
+  EXPECT_TRUE(tested_one->accepted);
   const Result<EkfUpdate> accepted = fresh.updateCameraPose(kSecondNs, cameraAt(llt.matrixL() * u), scene.C);
+  EXPECT_DOUBLE_EQ(tested_one->mahalanobis_sq, accepted->mahalanobis_sq);
   ASSERT_TRUE(accepted.ok());
   EXPECT_TRUE(accepted->accepted);
   EXPECT_NEAR(accepted->mahalanobis_sq, 1.0, 0.05);

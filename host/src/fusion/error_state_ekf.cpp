@@ -497,8 +497,17 @@ Status ErrorStateEkf::addImu(const ImuSample& sample) {
   return status;
 }
 
-Result<EkfUpdate> ErrorStateEkf::updateCameraPose(int64_t t_ns, const Pose& T_world_camera,
-                                                  const Matrix6d& covariance_camera, EkfGate gate) {
+struct ErrorStateEkf::PreparedUpdate {
+  Measurement m;
+  Node node;
+  bool insert = false;  // node is new, to go after nodes_[index]
+  size_t index = 0;     // Last node with t <= t_ns.
+  Innovation in;
+  EkfUpdate result;
+};
+
+Result<ErrorStateEkf::PreparedUpdate> ErrorStateEkf::prepareUpdate(int64_t t_ns, const Pose& T_world_camera,
+                                                                   const Matrix6d& covariance_camera) const {
   const std::string where = "camera pose update at " + std::to_string(t_ns) + " ns: ";
   if (!initialized()) return invalid(where + "the filter is not initialized (call initialize first)");
   if (!isValidPose(T_world_camera)) return invalid(where + "T_world_camera is not a finite rigid transform");
@@ -521,7 +530,8 @@ Result<EkfUpdate> ErrorStateEkf::updateCameraPose(int64_t t_ns, const Pose& T_wo
                    " ns; buffer_s too short?)");
   }
 
-  Measurement m;
+  PreparedUpdate p;
+  Measurement& m = p.m;
   m.T_world_body = T_world_camera * options_.T_body_camera.inverse();
   m.T_world_body.linear() = orthonormalized(m.T_world_body.linear());
   Matrix6d C =
@@ -535,27 +545,50 @@ Result<EkfUpdate> ErrorStateEkf::updateCameraPose(int64_t t_ns, const Pose& T_wo
   // interpolated between its neighbours.
   auto it =
       std::upper_bound(nodes_.begin(), nodes_.end(), t_ns, [](int64_t t, const Node& n) { return t < n.state.t_ns; });
-  size_t index = static_cast<size_t>(it - nodes_.begin()) - 1;  // Last node with t <= t_ns.
-  Node node;
-  const bool insert = nodes_[index].state.t_ns != t_ns;
-  if (insert) {
-    const Node& before = nodes_[index];
-    const Node& after = nodes_[index + 1];
-    node.reading = interpolate(before.reading, after.reading, t_ns);
-    node.has_reading = true;
-    node.state = propagate(before, node.reading);
+  p.index = static_cast<size_t>(it - nodes_.begin()) - 1;
+  p.insert = nodes_[p.index].state.t_ns != t_ns;
+  if (p.insert) {
+    const Node& before = nodes_[p.index];
+    const Node& after = nodes_[p.index + 1];
+    p.node.reading = interpolate(before.reading, after.reading, t_ns);
+    p.node.has_reading = true;
+    p.node.state = propagate(before, p.node.reading);
   } else {
-    node = nodes_[index];
+    p.node = nodes_[p.index];
   }
 
-  EkfUpdate result;
-  result.t_ns = t_ns;
-  result.gate_threshold = gate_threshold_;
-  const Innovation in = innovationOf(node.state, m.T_world_body, m.covariance);
-  result.innovation = in.r;
-  result.innovation_covariance = in.S;
-  result.mahalanobis_sq = in.mahalanobis_sq;
-  if (!in.ok) return invalid(where + "innovation covariance is not positive definite or not finite");
+  p.result.t_ns = t_ns;
+  p.result.gate_threshold = gate_threshold_;
+  p.in = innovationOf(p.node.state, m.T_world_body, m.covariance);
+  p.result.innovation = p.in.r;
+  p.result.innovation_covariance = p.in.S;
+  p.result.mahalanobis_sq = p.in.mahalanobis_sq;
+  if (!p.in.ok) return invalid(where + "innovation covariance is not positive definite or not finite");
+  return p;
+}
+
+Result<EkfUpdate> ErrorStateEkf::testCameraPose(int64_t t_ns, const Pose& T_world_camera,
+                                                const Matrix6d& covariance_camera) const {
+  Result<PreparedUpdate> p = prepareUpdate(t_ns, T_world_camera, covariance_camera);
+  if (!p.ok()) return p.error();
+  EkfUpdate result = p->result;
+  result.gate_skipped = awaiting_fix_;
+  result.accepted = result.gate_skipped || p->in.mahalanobis_sq <= gate_threshold_;
+  return result;
+}
+
+Result<EkfUpdate> ErrorStateEkf::updateCameraPose(int64_t t_ns, const Pose& T_world_camera,
+                                                  const Matrix6d& covariance_camera, EkfGate gate) {
+  const std::string where = "camera pose update at " + std::to_string(t_ns) + " ns: ";
+  Result<PreparedUpdate> prepared = prepareUpdate(t_ns, T_world_camera, covariance_camera);
+  if (!prepared.ok()) return prepared.error();
+  PreparedUpdate& p = *prepared;
+  const Measurement& m = p.m;
+  const Innovation& in = p.in;
+  Node& node = p.node;
+  const size_t index = p.index;
+  const bool insert = p.insert;
+  EkfUpdate& result = p.result;
   result.gate_skipped = gate == EkfGate::kForceAccept || awaiting_fix_;
   if (!result.gate_skipped && !(in.mahalanobis_sq <= gate_threshold_)) return result;  // Rejected.
 

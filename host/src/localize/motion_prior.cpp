@@ -84,6 +84,16 @@ std::optional<BridgedPose> ConstantVelocityPrior::bridge(int64_t, const std::opt
   return std::nullopt;
 }
 
+bool ConstantVelocityPrior::carryOn(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
+                                    const Pose& guess) {
+  bridge(t_ns, prediction, guess);
+  if (!prediction || !prediction->inertial) return false;
+  // The inertial pose carries the motion on: should the prediction expire (max_inertial_s), the
+  // constant-velocity guess continues from it, not from the last visual pose.
+  push(t_ns, prediction->T_world_camera);
+  return true;
+}
+
 void ConstantVelocityPrior::reset(const std::optional<Pose>& T_world_camera,
                                   const std::optional<Eigen::Vector3d>& v_world_camera) {
   prev_pose_.reset();
@@ -136,11 +146,7 @@ void InertialPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, cons
 
 std::optional<BridgedPose> InertialPrior::bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
                                                  const Pose& guess) {
-  motion_.bridge(t_ns, prediction, guess);
-  if (!prediction || !prediction->inertial) return std::nullopt;
-  // The inertial pose carries the motion on: should the prediction expire (max_inertial_s), the
-  // constant-velocity guess continues from it, not from the last visual pose.
-  motion_.push(t_ns, prediction->T_world_camera);
+  if (!motion_.carryOn(t_ns, prediction, guess)) return std::nullopt;
   // The last accepted frame's rotation uncertainty (gyro drift over max_inertial_s is far below
   // it), the prediction's in translation.
   BridgedPose out;
@@ -204,10 +210,9 @@ bool EkfPrior::consistent(const MotionPrediction& prediction, const Pose& T_worl
                           double) const {
   last_innovation_ = std::numeric_limits<double>::quiet_NaN();
   if (!prediction.inertial || !ekf_.initialized() || ekf_.awaitingFix()) return true;
-  // The filter's own test on a copy: the same residual, Jacobian, scale, floors and threshold as
-  // the update that follows when the pose passes.
-  ErrorStateEkf trial = ekf_;
-  Result<EkfUpdate> u = trial.updateCameraPose(ekf_.newestNs(), T_world_camera, covariance, EkfGate::kGated);
+  // The filter's own test: the same residual, Jacobian, scale, floors and threshold as the
+  // update that follows when the pose passes.
+  Result<EkfUpdate> u = ekf_.testCameraPose(ekf_.newestNs(), T_world_camera, covariance);
   if (!u.ok()) return true;  // cannot be tested (e.g. no reading yet at the frame's time)
   last_innovation_ = u->mahalanobis_sq;
   return u->accepted;
@@ -220,20 +225,17 @@ void EkfPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Mat
   if (!ekf_.initialized()) {
     // The first trusted pose starts the filter: with the caller's velocity (tight), else an
     // unknown one (initial_sigma_velocity_m_s) that the next poses pin down.
-    std::optional<Matrix15d> P0;
     const EkfOptions& o = ekf_.options();
     double sigma_v = start_velocity_ ? 0.1 : o.initial_sigma_velocity_m_s;
     if (!start_velocity_ && scene_depth_m_ > 0 && aiding_.unknown_velocity_depths_per_s > 0) {
       sigma_v = std::max(0.5, aiding_.unknown_velocity_depths_per_s * scene_depth_m_);
     }
-    {
-      Vector15d sigma;
-      sigma << Eigen::Vector3d::Constant(o.initial_sigma_position_m), Eigen::Vector3d::Constant(sigma_v),
-          Eigen::Vector3d::Constant(o.initial_sigma_attitude_rad),
-          Eigen::Vector3d::Constant(o.initial_sigma_gyro_bias_rad_s),
-          Eigen::Vector3d::Constant(o.initial_sigma_accel_bias_m_s2);
-      P0 = Matrix15d(sigma.cwiseAbs2().asDiagonal());
-    }
+    Vector15d sigma;
+    sigma << Eigen::Vector3d::Constant(o.initial_sigma_position_m), Eigen::Vector3d::Constant(sigma_v),
+        Eigen::Vector3d::Constant(o.initial_sigma_attitude_rad),
+        Eigen::Vector3d::Constant(o.initial_sigma_gyro_bias_rad_s),
+        Eigen::Vector3d::Constant(o.initial_sigma_accel_bias_m_s2);
+    const Matrix15d P0 = sigma.cwiseAbs2().asDiagonal();
     const Eigen::Vector3d v_body = start_velocity_ ? *start_velocity_ : Eigen::Vector3d::Zero();
     if (!ekf_.initializeFromCamera(t_ns, T_world_camera, v_body, P0).ok()) return;
     // The start pose is itself a measurement (its covariance tightens the initial sigmas).
@@ -248,9 +250,7 @@ void EkfPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Mat
 
 std::optional<BridgedPose> EkfPrior::bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
                                             const Pose& guess) {
-  motion_.bridge(t_ns, prediction, guess);
-  if (!prediction || !prediction->inertial) return std::nullopt;
-  motion_.push(t_ns, prediction->T_world_camera);
+  if (!motion_.carryOn(t_ns, prediction, guess)) return std::nullopt;
   BridgedPose out;
   out.T_world_camera = prediction->T_world_camera;
   out.covariance = prediction->covariance;

@@ -220,6 +220,9 @@ class ErrorStateEkf {
   /// oldestNs(); a numerically failed update (S not positive definite, non-finite result).
   Result<EkfUpdate> updateCameraPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance_camera,
                                      EkfGate gate = EkfGate::kGated);
+  /// What updateCameraPose(t_ns, ..., kGated) would decide, without changing the filter: the
+  /// same residual, covariance and gate (accepted = it passes; repropagated_steps = 0). Same errors.
+  Result<EkfUpdate> testCameraPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance_camera) const;
 
   /// The state at the newest reading (or the initialization time). Default state before
   /// initialize().
@@ -265,6 +268,11 @@ class ErrorStateEkf {
     bool has_reading = false;               // False only at an initialization before any reading.
     std::vector<Measurement> measurements;  // Updates applied at this node, in arrival order.
   };
+
+  struct PreparedUpdate;  // The measurement, its node and innovation (error_state_ekf.cpp).
+  /// The checks and the innovation shared by updateCameraPose and testCameraPose.
+  Result<PreparedUpdate> prepareUpdate(int64_t t_ns, const Pose& T_world_camera,
+                                       const Matrix6d& covariance_camera) const;
 
   explicit ErrorStateEkf(const EkfOptions& options, double gate_threshold);
   Status startAt(const EkfState& state);

@@ -156,6 +156,9 @@ class ConstantVelocityPrior final : public MotionPrior {
 
   /// Moves the motion on by one pose at t_ns (the last one becomes the one before).
   void push(int64_t t_ns, const Pose& T_world_camera);
+  /// For the inertial priors' bridge: bridge(), then, when `prediction` is inertial, push() its
+  /// pose (the motion goes on from it should the inertial prediction expire); returns whether it was.
+  bool carryOn(int64_t t_ns, const std::optional<MotionPrediction>& prediction, const Pose& guess);
 
  private:
   MotionModel model_;
