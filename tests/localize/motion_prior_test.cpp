@@ -224,7 +224,9 @@ TEST(EkfPrior, PredictsFromTheFirstFrameGatesBridgesAndOutputsAtTheImuRate) {
     // The rotation comes from the gyro at once.
     EXPECT_LT(rotationAngleDeg(p->T_world_camera.linear().transpose() * truth1.linear()), 0.01);
     const double err1 = (p->T_world_camera.translation() - truth1.translation()).norm();
-    if (velocity_given) EXPECT_LT(err1, 0.01);
+    if (velocity_given) {
+      EXPECT_LT(err1, 0.01);
+    }
     EXPECT_TRUE(prior.consistent(*p, truth1, visual, 10.0)) << prior.lastInnovation();
     EXPECT_TRUE(std::isfinite(prior.lastInnovation()));
     prior.addVisualPose(t, truth1, visual);
