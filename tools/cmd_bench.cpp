@@ -402,6 +402,8 @@ static void addBenchVerb(CLI::App& app) {
       ->capture_default_str();
   live->add_option("--runs", largs->runs, "Timed runs")->check(CLI::Range(1, 100000))->capture_default_str();
   live->callback([largs] { runLiveBench(*largs); });
+
+  addVerifyBench(*bench);
 }
 
 VKLOC_REGISTER_VERB(90, addBenchVerb);

@@ -36,6 +36,7 @@ struct TrackArgs {
   std::string init_offset;  ///< "dx,dy,dz,rx,ry,rz": metres (world axes), degrees (camera axes).
   bool calibrate = false;
   bool no_imu = false;
+  double visual_delay_ms = 0;  ///< IMU readings fed this far ahead of each frame (a late frame).
   bool quiet = false;
   DeviceArgs device;
   bool no_vulkan = false;
@@ -182,7 +183,9 @@ void run(const TrackArgs& a) {
     for (size_t i = first; i < first + total; ++i) {
       const ImageEntry& entry = seq.images[i];
       ImageU8 gray = take(readImageU8(seq.imagePath(i), 1));
-      if (use_imu) next_imu = feedSequenceImu(seq, next_imu, entry.t_ns, *localizer);
+      if (use_imu) {
+        next_imu = feedSequenceImu(seq, next_imu, entry.t_ns + static_cast<int64_t>(a.visual_delay_ms * 1e6), *localizer);
+      }
       Result<LocalizationResult> r = localizer->localize(entry.t_ns, gray);
       if (!r.ok()) throw Failure{fmt::format("{}: frame {}: {}", seq.imagePath(i), i, r.error().message)};
       const LocalizationResult& f = *r;
@@ -351,6 +354,11 @@ void addTrackOptions(CLI::App* cmd, const std::shared_ptr<TrackArgs>& args) {
                   "Perturb the initial pose: 'dx,dy,dz,rx,ry,rz' (metres on world axes, degrees about camera axes)");
   cmd->add_flag("--calibrate", args->calibrate, "With --backend auto: time CPU and Vulkan on the first frame");
   cmd->add_flag("--no-imu", args->no_imu, "Ignore the sequence's imu.csv (no inertial aiding)");
+  cmd->add_option("--visual-delay-ms", args->visual_delay_ms,
+                  "Deliver each frame this late: the IMU readings up to the frame's time + this are given first "
+                  "(the filter then applies the visual pose as a delayed update; its output lags by as much)")
+      ->check(CLI::Range(0.0, 2000.0))
+      ->capture_default_str();
   cmd->add_flag("--no-vulkan", args->no_vulkan, "Render with the CPU reference rasterizer (slow)");
   cmd->add_flag("--quiet,-q", args->quiet, "Print only the final line");
   args->device.add(*cmd);

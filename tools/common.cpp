@@ -257,4 +257,30 @@ PinholeCamera sequenceCamera(const Sequence& seq) {
   return seq.camera.intrinsics;
 }
 
+std::optional<Pose> groundTruthAt(const std::vector<StampedPose>& gt, int64_t t_ns) {
+  if (gt.empty()) return std::nullopt;
+  const auto after =
+      std::lower_bound(gt.begin(), gt.end(), t_ns, [](const StampedPose& p, int64_t t) { return p.t_ns < t; });
+  if (after != gt.end() && after->t_ns == t_ns) return after->T_world_camera;
+  if (after != gt.begin() && after != gt.end()) {
+    const StampedPose& a = *(after - 1);
+    const StampedPose& b = *after;
+    if (b.t_ns - a.t_ns <= 50'000'000) {
+      const double s = static_cast<double>(t_ns - a.t_ns) / static_cast<double>(b.t_ns - a.t_ns);
+      Pose T = Pose::Identity();
+      const Eigen::Quaterniond qa(a.T_world_camera.linear()), qb(b.T_world_camera.linear());
+      T.linear() = qa.slerp(s, qb).toRotationMatrix();
+      T.translation() = (1 - s) * a.T_world_camera.translation() + s * b.T_world_camera.translation();
+      return T;
+    }
+  }
+  const StampedPose* nearest = nullptr;
+  if (after != gt.end()) nearest = &*after;
+  if (after != gt.begin() && (nearest == nullptr || t_ns - (after - 1)->t_ns < nearest->t_ns - t_ns)) {
+    nearest = &*(after - 1);
+  }
+  if (nearest != nullptr && std::abs(nearest->t_ns - t_ns) <= 10'000'000) return nearest->T_world_camera;
+  return std::nullopt;
+}
+
 }  // namespace vkloc::cli

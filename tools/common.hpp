@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -115,5 +116,12 @@ struct VerbRegistration {
 };
 #define VKLOC_REGISTER_VERB(order, add_function) \
   static const ::vkloc::cli::VerbRegistration vkloc_verb_registration_##add_function { order, add_function }
+
+/// Ground truth at t_ns: interpolated (linear position, slerp rotation) between two samples at
+/// most 50 ms apart, else the nearest sample within 10 ms (the evaluation's defaults).
+std::optional<Pose> groundTruthAt(const std::vector<StampedPose>& gt, int64_t t_ns);
+
+/// Adds `vkloc bench verify` (cmd_bench_verify.cpp) to the bench verb.
+void addVerifyBench(CLI::App& bench);
 
 }  // namespace vkloc::cli

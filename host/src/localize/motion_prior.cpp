@@ -42,6 +42,7 @@ Status ConstantVelocityPrior::addImu(const ImuSample& sample) {
 std::optional<MotionPrediction> ConstantVelocityPrior::predict(int64_t t_ns) const {
   if (!last_pose_) return std::nullopt;
   MotionPrediction p;
+  p.t_ns = t_ns;
   p.T_world_camera = *last_pose_;
   if (model_ == MotionModel::kLastPose) return p;
   if (!prev_pose_ && initial_velocity_ && last_pose_timed_) {
@@ -117,6 +118,7 @@ std::optional<MotionPrediction> InertialPrior::predict(int64_t t_ns) const {
     std::optional<InertialPrediction> inertial = predictor_.predict(t_ns);
     if (inertial && inertial->since_fix_s <= aiding_.max_inertial_s) {
       MotionPrediction p;
+      p.t_ns = t_ns;
       p.T_world_camera = inertial->T_world_body * aiding_.T_body_camera;
       p.inertial = true;
       p.sigma_m = inertial->sigma_m;
@@ -195,6 +197,7 @@ std::optional<MotionPrediction> EkfPrior::predict(int64_t t_ns) const {
     Result<EkfPrediction> p = ekf_.predict(t_ns);
     if (p.ok()) {
       MotionPrediction out;
+      out.t_ns = t_ns;
       out.T_world_camera = p->T_world_camera;
       out.inertial = true;
       out.covariance = p->covariance_camera;
@@ -211,8 +214,10 @@ bool EkfPrior::consistent(const MotionPrediction& prediction, const Pose& T_worl
   last_innovation_ = std::numeric_limits<double>::quiet_NaN();
   if (!prediction.inertial || !ekf_.initialized() || ekf_.awaitingFix()) return true;
   // The filter's own test: the same residual, Jacobian, scale, floors and threshold as the
-  // update that follows when the pose passes.
-  Result<EkfUpdate> u = ekf_.testCameraPose(ekf_.newestNs(), T_world_camera, covariance);
+  // update that follows when the pose passes (at the frame's time: the IMU may run ahead of a
+  // frame delivered late, and the update is then a delayed one).
+  const int64_t t_test = std::min(prediction.t_ns, ekf_.newestNs());
+  Result<EkfUpdate> u = ekf_.testCameraPose(t_test, T_world_camera, covariance);
   if (!u.ok()) return true;  // cannot be tested (e.g. no reading yet at the frame's time)
   last_innovation_ = u->mahalanobis_sq;
   return u->accepted;

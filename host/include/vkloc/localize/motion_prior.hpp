@@ -74,6 +74,7 @@ Status validateInertialAiding(const InertialAiding& aiding);
 
 /// A predicted camera pose.
 struct MotionPrediction {
+  int64_t t_ns = 0;  ///< Time the prediction is for, nanoseconds.
   Pose T_world_camera = Pose::Identity();
   bool inertial = false;  ///< Propagated from IMU readings (else the motion model's extrapolation).
   double sigma_m = 0;     ///< 1-sigma position error of an inertial prediction, metres (0 otherwise).
