@@ -67,6 +67,8 @@ void runVerifyBench(const VerifyBenchArgs& a) {
   std::vector<Sample> samples;
   size_t unaligned = 0;
   LocalizerOptions defaults;
+  VerificationOptions verification;
+  verification.inlier_threshold_px = defaults.tracker.inlier_threshold_px;
   const auto t_start = std::chrono::steady_clock::now();
   for (const std::string& dir : a.sequences) {
     const Sequence seq = take(loadSequence(dir));
@@ -145,7 +147,7 @@ void runVerifyBench(const VerifyBenchArgs& a) {
           s.label = -1;
         }
         s.features = verificationFeatures(r, keyframe->scene_depth_m);
-        s.score = verificationScore(s.features);
+        s.score = verificationScore(s.features, verification);
         samples.push_back(s);
       }
       ++done;
@@ -178,7 +180,7 @@ void runVerifyBench(const VerifyBenchArgs& a) {
   for (const Sample& s : samples) {
     if (std::find(groups.begin(), groups.end(), s.sequence) == groups.end()) groups.push_back(s.sequence);
   }
-  const double threshold = VerificationThresholds{}.min_score;
+  const double threshold = verification.min_score;
   std::printf(
       "true sample: converged within %.1f %% of the scene depth and %.2f deg; wrong: beyond %.1f %% or %.1f deg\n",
       100 * a.true_fraction, a.true_deg, 100 * a.wrong_fraction, a.wrong_deg);
@@ -213,7 +215,7 @@ void runVerifyBench(const VerifyBenchArgs& a) {
                 pct(acceptedFraction(pos, thr_1)).c_str(), pct(acceptedFraction(neg, thr_1)).c_str(), thr_1);
   }
   std::printf(
-      "score threshold (VerificationThresholds::min_score): %.3f; %zu alignments (%zu starts without model edges "
+      "score threshold (VerificationOptions::min_score): %.3f; %zu alignments (%zu starts without model edges "
       "in view left out) in %.0f s\n",
       threshold, samples.size(), unaligned, msSince(t_start) / 1000.0);
 }

@@ -53,7 +53,12 @@ std::string seconds(int64_t t_ns) {
 /// position with central-difference velocities, slerp in rotation, linear in velocity).
 struct FilterErrors {
   std::vector<double> position_m, rotation_deg, velocity_m_s;
+  /// The same from kSettleS after the first output on (the start transient left out: an unknown
+  /// start velocity takes the first fixes to pin down).
+  std::vector<double> settled_position_m, settled_rotation_deg, settled_velocity_m_s;
 };
+
+constexpr double kSettleS = 1.0;
 
 FilterErrors filterErrors(const std::vector<FilterOutput>& outputs, const std::vector<StampedPose>& gt) {
   FilterErrors e;
@@ -80,6 +85,11 @@ FilterErrors filterErrors(const std::vector<FilterOutput>& outputs, const std::v
     e.position_m.push_back((o.T_world_camera.translation() - p).norm());
     e.rotation_deg.push_back(rotationAngleDeg(q.toRotationMatrix().transpose() * o.T_world_camera.linear()));
     e.velocity_m_s.push_back((o.v_world_body - vel).norm());
+    if (static_cast<double>(o.t_ns - outputs.front().t_ns) * 1e-9 >= kSettleS) {
+      e.settled_position_m.push_back(e.position_m.back());
+      e.settled_rotation_deg.push_back(e.rotation_deg.back());
+      e.settled_velocity_m_s.push_back(e.velocity_m_s.back());
+    }
   }
   return e;
 }
@@ -158,7 +168,7 @@ void run(const TrackArgs& a) {
   check(frames->appendLine(
       "t_ns,state,render_ms,reference_ms,live_ms,align_ms,total_ms,inlier_ratio,mean_residual_px,points,iterations,"
       "rerendered,visible_ratio,spread_ratio,chance_inlier_ratio,scale_px,keyframe_id,keyframe_age_frames,"
-      "keyframe_adopted,visual_rejected,ekf_nis,inertial_sigma_m"));
+      "keyframe_adopted,visual_rejected,ekf_nis,inertial_sigma_m,verify_score"));
   // The filter's output at the IMU rate (kEkf): camera pose, body velocity, 1-sigma figures.
   const std::string filter_path = (out_path.parent_path() / (out_path.stem().string() + "_filter.csv")).string();
   auto filter_out = take(PartialFileWriter::open(filter_path));
@@ -205,12 +215,12 @@ void run(const TrackArgs& a) {
       check(frames->appendLine(fmt::format(
           "{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{},{},{:."
           "4g},"
-          "{:.4g}",
+          "{:.4g},{:.4f}",
           entry.t_ns, trackingStateName(f.state), f.render_ms, f.reference_ms, f.live_ms, f.align_ms, f.total_ms,
           f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used, f.quality.iterations,
           f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio, f.quality.chance_inlier_ratio,
           f.quality.scale_px, f.keyframe_id, f.keyframe_age_frames, f.keyframe_adopted ? 1 : 0,
-          f.visual_rejected ? 1 : 0, f.innovation, f.inertial_sigma_m)));
+          f.visual_rejected ? 1 : 0, f.innovation, f.inertial_sigma_m, f.verify_score)));
       for (const FilterOutput& o : localizer->takeFilterOutputs()) {
         const Eigen::Quaterniond q(o.T_world_camera.linear());
         const Eigen::Vector3d& t = o.T_world_camera.translation();
@@ -316,6 +326,12 @@ void run(const TrackArgs& a) {
           filter_outputs.size(), span_s > 0 ? static_cast<double>(filter_outputs.size() - 1) / span_s : 0.0,
           rms(fe.position_m), median(fe.position_m), rms(fe.rotation_deg), rms(fe.velocity_m_s),
           median(fe.velocity_m_s));
+      summary += fmt::format(
+          ",\n  \"filter_settled_after_s\": {:.1f},\n  \"filter_settled_position_rms_m\": {:.6g},\n"
+          "  \"filter_settled_position_median_m\": {:.6g},\n  \"filter_settled_rotation_rms_deg\": {:.6g},\n"
+          "  \"filter_settled_velocity_rms_m_s\": {:.6g},\n  \"filter_settled_velocity_median_m_s\": {:.6g}",
+          kSettleS, rms(fe.settled_position_m), median(fe.settled_position_m), rms(fe.settled_rotation_deg),
+          rms(fe.settled_velocity_m_s), median(fe.settled_velocity_m_s));
     }
     if (!a.quiet) {
       std::fputs(formatEvalTable(result).c_str(), stdout);

@@ -476,6 +476,11 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   out.covariance = track.covariance;
   out.reference_points = static_cast<int>(keyframe.reference.points.size());
   out.scene_depth_m = keyframe.scene_depth_m;
+  {
+    VerificationOptions verification = m.options.verification;
+    verification.inlier_threshold_px = m.options.tracker.inlier_threshold_px;
+    out.verify_score = verificationScore(verificationFeatures(track, keyframe.scene_depth_m), verification);
+  }
   out.keyframe_id = keyframe.id;
   out.keyframe_age_frames = m.frame_index - keyframe.request.frame_index;
 

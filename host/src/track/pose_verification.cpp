@@ -25,6 +25,15 @@ VerificationFeatures verificationFeatures(const TrackResult& result, double scen
   return f;
 }
 
-double verificationScore(const VerificationFeatures& f) { return std::clamp(f.above_chance, 0.0, 1.0); }
+double verificationScore(const VerificationFeatures& f, const VerificationOptions& o) {
+  auto ramp = [](double x, double zero, double width) { return std::clamp((x - zero) / width, 0.0, 1.0); };
+  const double above = std::clamp(f.above_chance, 0.0, 1.0);
+  const double residual = f.mean_residual_px / o.inlier_threshold_px;
+  const double residual_term = ramp(o.residual_zero - residual, 0.0, o.residual_ramp);
+  const double spread = f.spread_ratio > 0 ? std::min(f.spread_ratio, 1.0 / f.spread_ratio) : 0.0;
+  const double spread_term = ramp(spread, o.spread_zero, o.spread_ramp);
+  const double score = above * residual_term * spread_term;
+  return std::isfinite(score) ? score : 0.0;
+}
 
 }  // namespace vkloc

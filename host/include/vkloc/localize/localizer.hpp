@@ -40,6 +40,7 @@
 #include "vkloc/track/edge_backend.hpp"
 #include "vkloc/track/edge_tracker.hpp"
 #include "vkloc/track/live_frame.hpp"
+#include "vkloc/track/pose_verification.hpp"
 #include "vkloc/track/reference_edges.hpp"
 
 namespace vkloc {
@@ -98,6 +99,8 @@ struct LocalizerOptions {
   /// wrong ones.
   double max_point_motion_px = 40.0;
   InertialAiding inertial;  ///< IMU-propagated guesses and consistency gate (when readings are given).
+  /// Constants of LocalizationResult::verify_score (inlier_threshold_px is taken from `tracker`).
+  VerificationOptions verification;
   /// The prior's uncertainty sets how far the alignment searches: with a covariance (kEkf), a
   /// frame's alignment starts at the pyramid level where search_sigmas x the predicted 1-sigma
   /// image displacement (translation across the view at the keyframe's median depth, and
@@ -119,6 +122,10 @@ struct LocalizationResult {
   /// Covariance of xi (m^2, rad^2, [rho; phi], live camera frame; see TrackResult::covariance).
   Matrix6d covariance = Matrix6d::Zero();
   TrackQuality quality;  ///< Alignment quality on the finest level.
+  /// Verification score of the frame's alignment (0..1, track/pose_verification.hpp): at or
+  /// above LocalizerOptions::verification.min_score the pose is the true one with the measured
+  /// rates of `vkloc bench verify`. Reported, not yet used in the tracking decision.
+  double verify_score = 0;
   /// kTracking: the visual alignment is trusted; kInertial: it was lost or disagreed with the
   /// IMU, T_world_camera is the inertial prediction (InertialAiding); kLost: no trusted pose.
   TrackingState state = TrackingState::kLost;

@@ -29,12 +29,26 @@ struct VerificationFeatures {
 /// The features of an alignment result; scene_depth_m is the keyframe's median depth (metres).
 VerificationFeatures verificationFeatures(const TrackResult& result, double scene_depth_m);
 
-/// Verification score in 0..1 (higher: more likely the true pose).
-double verificationScore(const VerificationFeatures& features);
-
-/// Acceptance threshold of the score.
-struct VerificationThresholds {
-  double min_score = 0.25;
+/// Constants of the score and its acceptance threshold, chosen from the distributions of
+/// `vkloc bench verify` on the development sequences, the simulator's hard scenarios and
+/// Castle-simu (README "Pose verification").
+struct VerificationOptions {
+  double inlier_threshold_px = 1.5;  ///< EdgeTrackerOptions::inlier_threshold_px of the alignment.
+  /// Residual term: the inliers' mean residual over the inlier threshold is about 0.5 for chance
+  /// matches (residuals spread evenly below the threshold) and 0.1-0.3 at true poses. The term
+  /// is 0 at or above residual_zero and 1 at or below residual_zero - residual_ramp.
+  double residual_zero = 0.45;
+  double residual_ramp = 0.25;
+  /// Spread term: min(spread, 1 / spread) of the projected points (TrackQuality::spread_ratio)
+  /// below spread_zero gives 0, above spread_zero + spread_ramp 1 (a pose that shrinks the
+  /// points onto a few edges).
+  double spread_zero = 0.6;
+  double spread_ramp = 0.2;
+  double min_score = 0.15;  ///< A pose is verified at or above this score.
 };
+
+/// Verification score in 0..1 (higher: more likely the true pose): the inliers above chance
+/// (max(0, above_chance)) times the residual term times the spread term (VerificationOptions).
+double verificationScore(const VerificationFeatures& features, const VerificationOptions& options = {});
 
 }  // namespace vkloc
