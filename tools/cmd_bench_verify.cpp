@@ -33,10 +33,10 @@ struct VerifyBenchArgs {
   int every = 5;
   int offsets = 6;
   uint64_t seed = 1;
-  double true_fraction = 0.005;   ///< True sample: translation error <= this x scene depth ...
-  double true_deg = 0.5;          ///< ... and rotation error <= this, degrees.
-  double wrong_fraction = 0.02;   ///< Wrong sample: translation error > this x scene depth ...
-  double wrong_deg = 2.0;         ///< ... or rotation error > this, degrees.
+  double true_fraction = 0.005;       ///< True sample: translation error <= this x scene depth ...
+  double true_deg = 0.5;              ///< ... and rotation error <= this, degrees.
+  double wrong_fraction = 0.02;       ///< Wrong sample: translation error > this x scene depth ...
+  double wrong_deg = 2.0;             ///< ... or rotation error > this, degrees.
   double max_offset_fraction = 0.15;  ///< Largest start offset, x scene depth.
   double max_offset_deg = 8.0;        ///< Largest start rotation offset, degrees.
   int search_level = 2;               ///< Coarsest pyramid level of the alignments.
@@ -169,9 +169,8 @@ void runVerifyBench(const VerifyBenchArgs& a) {
           "{},{},{},{:.4f},{:.3f},{:.3f},{:.5f},{:.4f},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},{:.4f},"
           "{:.4f},{},{:.6f},{:.5f}",
           s.sequence, s.frame, s.trial, s.offset_m, s.offset_deg, s.depth_m, s.t_err_m, s.r_err_deg, s.label,
-          s.tracked ? 1 : 0, s.score, f.inlier_ratio, f.chance_inlier_ratio, f.above_chance,
-          f.mean_residual_px, f.scale_px, f.spread_ratio, f.visible_ratio, f.points_in_image, f.sigma_t_rel,
-          f.sigma_r_deg)));
+          s.tracked ? 1 : 0, s.score, f.inlier_ratio, f.chance_inlier_ratio, f.above_chance, f.mean_residual_px,
+          f.scale_px, f.spread_ratio, f.visible_ratio, f.points_in_image, f.sigma_t_rel, f.sigma_r_deg)));
     }
     check(out->commit());
   }
@@ -225,11 +224,14 @@ void runVerifyBench(const VerifyBenchArgs& a) {
 void addVerifyBench(CLI::App& bench) {
   auto args = std::make_shared<VerifyBenchArgs>();
   CLI::App* verify = bench.add_subcommand(
-      "verify", "ROC of the pose verification score: true poses vs wrong converged ones on sequences with ground truth");
+      "verify",
+      "ROC of the pose verification score: true poses vs wrong converged ones on sequences with ground truth");
   verify->add_option("--sequence", args->sequences, "Sequence folders (repeat or comma-separate)")
       ->required()
       ->delimiter(',');
-  verify->add_option("--every", args->every, "Use every Nth frame")->check(CLI::Range(1, 100000))->capture_default_str();
+  verify->add_option("--every", args->every, "Use every Nth frame")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
   verify->add_option("--offsets", args->offsets, "Offset starts per frame besides the one at the truth")
       ->check(CLI::Range(0, 100))
       ->capture_default_str();

@@ -41,7 +41,7 @@ TEST(PoseVerification, ScoreSeparatesTheKindsOfWrongPose) {
   const double truth = score(0.85, 0.2, 0.25, 1.0);
   EXPECT_GE(truth, o.min_score);
   EXPECT_LE(truth, 1.0);
-  EXPECT_NEAR(truth, (0.85 - 0.2) / 0.8, 1e-12);                        // both terms saturate
+  EXPECT_NEAR(truth, (0.85 - 0.2) / 0.8, 1e-12);                         // both terms saturate
   EXPECT_LT(score(0.85, 0.2, 0.5 * o.inlier_threshold_px, 1.0), 1e-12);  // residuals spread evenly: chance
   EXPECT_LT(score(1.0, 0.2, 0.2, 0.05), 1e-12);                          // shrunk onto a few edges
   EXPECT_LT(score(1.0, 0.2, 0.2, 20.0), 1e-12);                          // blown up

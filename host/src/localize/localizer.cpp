@@ -10,6 +10,7 @@
 #include "vkloc/core/clock.hpp"
 #include "vkloc/core/numeric.hpp"
 #include "vkloc/render/cpu_renderer.hpp"
+#include "vkloc/track/image_motion.hpp"
 
 namespace vkloc {
 namespace {
@@ -50,6 +51,13 @@ Status validateOptions(const LocalizerOptions& o) {
     return makeError(
         ErrorCode::kInvalidArgument,
         "Localizer: need max_search_level in 0..7, search_sigmas in 0..100 and search_basin_px in 0.1..1e4");
+  }
+  if (o.motion_search_steps < 0 || o.motion_search_steps > 10 || o.motion_search_candidates < 1 ||
+      o.motion_search_candidates > 50 || !finiteIn(o.motion_search_max_gap_s, 0.0, 10.0) ||
+      !finiteIn(o.motion_search_min_response, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "Localizer: need motion_search_steps in 0..10, motion_search_candidates in 1..50, "
+                     "motion_search_max_gap_s in 0..10 and motion_search_min_response in 0..1");
   }
   if (!finiteIn(o.max_point_motion_px, 0.0, 1e6)) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: max_point_motion_px must be in 0..1e6");
@@ -152,7 +160,14 @@ struct Localizer::Impl {
   std::optional<int64_t> last_t_ns;  ///< Last frame given to localize.
   int64_t frame_index = -1;          ///< Frames given to localize since create.
   bool tracked_since_reset = false;  ///< A frame was tracked since create/reset.
-  int search_level = 0;              ///< This frame's alignment starts at least this deep (searchLevel).
+  /// The last frame whose pose was tracked and accepted: its image, pose and time.
+  struct TrackedImage {
+    ImageU8 gray;
+    Pose T_world_camera = Pose::Identity();
+    int64_t t_ns = 0;
+  };
+  std::optional<TrackedImage> last_tracked_gray;
+  int search_level = 0;  ///< This frame's alignment starts at least this deep (searchLevel).
 
   /// Pyramid level whose basin covers the prediction's uncertainty (LocalizerOptions::max_search_level).
   int searchLevel(const std::optional<MotionPrediction>& prediction, double scene_depth_m) const {
@@ -233,6 +248,121 @@ struct Localizer::Impl {
     Result<TrackResult> r = backend.align(slow ? *slow : reference, start, tracker);
     out.align_ms += msSince(t0);
     return r;
+  }
+
+  /// Motion search (LocalizerOptions::motion_search_steps): `lost` is the frame's alignment from
+  /// `guess` (lost, or refused by the motion prior's gate: `refused`); returns it unchanged when
+  /// the search does not apply or finds nothing tracked, verified and not refused.
+  template <typename AlignFrom, typename Refused>
+  Result<TrackResult> motionSearch(const MotionPrediction& prediction, const Pose& guess, const ImageU8* gray_now,
+                                   TrackResult lost, AlignFrom& alignFrom, Refused& refused, LocalizationResult& out) {
+    const Keyframe& keyframe = *keyframes->current();
+    const int level = std::min(options.max_search_level, options.live.levels - 1);
+    if (options.motion_search_steps <= 0 || level < 0 || !(keyframe.scene_depth_m > 0) ||
+        keyframe.reference.points.size() < 6) {
+      return lost;
+    }
+    // Basin of the deepest level across the view, metres at the scene depth (eq. of searchLevel).
+    const double basin_m =
+        options.search_basin_px * std::ldexp(1.0, level) / std::max(camera.fx, camera.fy) * keyframe.scene_depth_m;
+    const double step_m = 1.5 * basin_m;
+    int steps[2];
+    double spacing[2];
+    for (int a = 0; a < 2; ++a) {
+      const double reach = options.search_sigmas * std::sqrt(std::max(0.0, prediction.covariance(a, a)));
+      steps[a] = std::min(options.motion_search_steps, static_cast<int>(std::ceil(reach / step_m - 0.5)));
+      spacing[a] = step_m;
+    }
+    if (steps[0] == 0 && steps[1] == 0) return lost;
+    VerificationOptions verification = options.verification;
+    verification.inlier_threshold_px = options.tracker.inlier_threshold_px;
+    // Many starts give many chances to converge somewhere wrong: a result must be tracked, pass
+    // the prior's gate and the pose verification; the best verified one is kept, and the search
+    // stops early at one verified with motion_search_confident_score.
+    std::optional<TrackResult> best;
+    double best_score = 0;
+    auto consider = [&](TrackResult r) {
+      if (r.state != TrackingState::kTracking || refused(r)) return false;
+      const double score = verificationScore(verificationFeatures(r, keyframe.scene_depth_m), verification);
+      if (score < verification.min_score || (best && score <= best_score)) return false;
+      best = std::move(r);
+      best_score = score;
+      return score >= options.motion_search_confident_score;
+    };
+    // First the starts the image motion since the last tracked frame points at: the gyro turns
+    // that frame into this view, and the shift left is the translation across the view at the
+    // scene depth (shift = -f t / depth). Motion along the view (a zoom) does not shift the
+    // image: steps along it of 1.5 basins at a quarter of the image diagonal are tried in turn.
+    // The shift is good to a few pixels, so these starts align from level 1 at most.
+    if (last_tracked_gray && gray_now &&
+        static_cast<double>(out.t_ns - last_tracked_gray->t_ns) * 1e-9 <= options.motion_search_max_gap_s) {
+      const Eigen::Matrix3d R_current_previous =
+          guess.linear().transpose() * last_tracked_gray->T_world_camera.linear();
+      const Result<std::vector<ImageShift>> shifts =
+          estimateImageShifts(last_tracked_gray->gray, *gray_now, camera, R_current_previous);
+      std::vector<ImageShift> peaks;
+      if (shifts.ok()) {
+        for (const ImageShift& shift : *shifts) {
+          if (shift.response >= options.motion_search_min_response) peaks.push_back(shift);
+        }
+      }
+      if (!peaks.empty()) out.image_shift_px = std::hypot(peaks.front().dx_px, peaks.front().dy_px);
+      const int shift_level = std::min(search_level, 1);
+      const double radius_px = 0.25 * std::hypot(camera.width, camera.height);
+      const double step_z =
+          1.5 * options.search_basin_px * std::ldexp(1.0, shift_level) / radius_px * keyframe.scene_depth_m;
+      const double reach_z = options.search_sigmas * std::sqrt(std::max(0.0, prediction.covariance(2, 2)));
+      const int steps_z = std::min(2, static_cast<int>(std::ceil(reach_z / step_z - 0.5)));
+      for (int k = 0; k <= 2 * steps_z; ++k) {
+        const int z = (k + 1) / 2 * (k % 2 == 1 ? 1 : -1);  // 0, +1, -1, +2, -2
+        for (const ImageShift& shift : peaks) {
+          Pose start = guess;
+          const Eigen::Vector3d t_camera(-shift.dx_px * keyframe.scene_depth_m / camera.fx,
+                                         -shift.dy_px * keyframe.scene_depth_m / camera.fy, z * step_z);
+          start.translation() = last_tracked_gray->T_world_camera.translation() + guess.linear() * t_camera;
+          const int saved_level = search_level;
+          search_level = shift_level;
+          Result<TrackResult> r = alignFrom(start);
+          search_level = saved_level;
+          if (!r.ok()) return r.error();
+          ++out.motion_search_probes;
+          if (consider(std::move(r).value())) return std::move(*best);
+        }
+      }
+    }
+    // Probes: a few Gauss-Newton steps on the deepest level alone, scored by their inliers there.
+    EdgeTrackerOptions probe = options.tracker;
+    probe.coarsest_level = level;
+    probe.finest_level = level;
+    probe.far_first_depth_quantile = 0;
+    probe.max_iterations = 5;
+    struct Candidate {
+      Pose start;
+      double inliers;
+    };
+    std::vector<Candidate> candidates;
+    const auto t0 = SteadyClock::now();
+    for (int i = -steps[0]; i <= steps[0]; ++i) {
+      for (int j = -steps[1]; j <= steps[1]; ++j) {
+        if (i == 0 && j == 0) continue;
+        Pose start = guess;
+        start.translation() += guess.linear() * Eigen::Vector3d(i * spacing[0], j * spacing[1], 0.0);
+        Result<TrackResult> r = active->align(keyframe.reference, start, probe);
+        if (!r.ok()) return r.error();
+        ++out.motion_search_probes;
+        candidates.push_back({r->T_world_camera, r->quality.inlier_ratio * r->quality.points_in_image});
+      }
+    }
+    out.align_ms += msSince(t0);
+    const size_t keep = std::min(candidates.size(), static_cast<size_t>(std::max(1, options.motion_search_candidates)));
+    std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(keep), candidates.end(),
+                      [](const Candidate& a, const Candidate& b) { return a.inliers > b.inliers; });
+    for (size_t k = 0; k < keep; ++k) {
+      Result<TrackResult> r = alignFrom(candidates[k].start);
+      if (!r.ok()) return r.error();
+      if (consider(std::move(r).value())) break;
+    }
+    return best ? std::move(*best) : std::move(lost);
   }
 
   /// First-frame calibration of kAuto with calibrate_backend: run both and keep the faster.
@@ -374,6 +504,7 @@ void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vec
   m.uploaded_id = 0;
   m.last_t_ns.reset();
   m.tracked_since_reset = false;
+  m.last_tracked_gray.reset();
   m.motion->reset(T_world_camera, v_world_camera);  // timestamps may start over
 }
 
@@ -459,6 +590,18 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
     if (!retry.ok()) return retry.error();
     track = std::move(retry).value();
   }
+  // 3b. Motion search: lost while the prior's uncertainty exceeds the deepest basin.
+  // A pose the filter's gate refuses is as good as lost here.
+  auto refused = [&](const TrackResult& r) {
+    return r.state == TrackingState::kTracking &&
+           !m.motion->consistent(*prediction, r.T_world_camera, r.covariance, m.keyframes->current()->scene_depth_m);
+  };
+  if (!T_world_camera_guess && prediction && prediction->inertial &&
+      (track.state == TrackingState::kLost || refused(track))) {
+    Result<TrackResult> searched = m.motionSearch(*prediction, guess, &gray, std::move(track), alignFrom, refused, out);
+    if (!searched.ok()) return searched.error();
+    track = std::move(searched).value();
+  }
   // 4. Start-up: widen the basin until a first frame is tracked.
   if (!m.tracked_since_reset) {
     InitializerSteps steps;
@@ -498,6 +641,11 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
     m.motion->addVisualPose(t_ns, track.T_world_camera, track.covariance);
     m.keyframes->frameTracked(track.quality);
     m.tracked_since_reset = true;
+    // Kept for the motion search of the next frames (image shift from the last tracked frame).
+    if (!m.last_tracked_gray) m.last_tracked_gray.emplace();
+    m.last_tracked_gray->gray = gray;
+    m.last_tracked_gray->T_world_camera = track.T_world_camera;
+    m.last_tracked_gray->t_ns = t_ns;
   } else {
     m.keyframes->frameNotTracked();
     const std::optional<BridgedPose> bridged = m.motion->bridge(t_ns, prediction, guess);

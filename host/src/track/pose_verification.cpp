@@ -11,7 +11,8 @@ VerificationFeatures verificationFeatures(const TrackResult& result, double scen
   VerificationFeatures f;
   f.inlier_ratio = q.inlier_ratio;
   f.chance_inlier_ratio = q.chance_inlier_ratio;
-  f.above_chance = q.chance_inlier_ratio < 1.0 ? (q.inlier_ratio - q.chance_inlier_ratio) / (1.0 - q.chance_inlier_ratio) : 0.0;
+  f.above_chance =
+      q.chance_inlier_ratio < 1.0 ? (q.inlier_ratio - q.chance_inlier_ratio) / (1.0 - q.chance_inlier_ratio) : 0.0;
   f.mean_residual_px = q.mean_residual_px;
   f.scale_px = q.scale_px;
   f.spread_ratio = q.spread_ratio;

@@ -110,6 +110,26 @@ struct LocalizerOptions {
   int max_search_level = 2;
   double search_sigmas = 3.0;
   double search_basin_px = 6.0;
+  /// Motion search: when a frame is lost, or its pose refused by the prior's gate, while the
+  /// prior's translation uncertainty across the view spans more than the basin of the deepest
+  /// search level (a start in motion with an unknown velocity), the alignment is tried from
+  /// other starts: first those the image shifts since the last tracked frame point at (see
+  /// below), then a grid of start translations across the view (spaced 1.5 basins of that level
+  /// apart, out to search_sigmas sigma but at most motion_search_steps steps each way), probed
+  /// with a few Gauss-Newton steps on that level alone, aligned fully from the
+  /// motion_search_candidates probes with the most inliers. Of the results tracked, passing the
+  /// gate and verified (verification.min_score) the best score is kept. 0 steps = off.
+  int motion_search_steps = 6;
+  int motion_search_candidates = 3;
+  /// Before the grid, the motion search aligns from the start the image shift since the last
+  /// tracked frame points at (track/image_motion.hpp), when that frame is at most
+  /// motion_search_max_gap_s old and the shift's phase correlation response is at least
+  /// motion_search_min_response.
+  double motion_search_max_gap_s = 0.25;
+  double motion_search_min_response = 0.1;
+  /// The motion search keeps the best verified result of its starts and stops at one whose
+  /// verification score reaches this (true poses of the development sequences score 0.5-1).
+  double motion_search_confident_score = 0.5;
   /// With kAuto and an Accelerator: time the CPU and device live stages + alignment on the
   /// first frame and keep the faster one (instead of deciding by the device type alone).
   bool calibrate_backend = false;
@@ -141,14 +161,16 @@ struct LocalizationResult {
   /// Frames between the frame the keyframe's pose was made for and this one (negative: it was
   /// made for a frame still to come).
   int64_t keyframe_age_frames = 0;
-  int reference_points = 0;  ///< Edge points of the finest keyframe level.
-  int search_level = 0;      ///< Deepest pyramid level the prior's uncertainty made the alignment start at.
-  double scene_depth_m = 0;  ///< Median depth of the keyframe render's surfaces, metres (0: none seen).
-  double render_ms = 0;      ///< Rendering keyframes on this call, ms (0 when none was made here).
-  double reference_ms = 0;   ///< Extracting their edge points, ms.
-  double live_ms = 0;        ///< Live pyramid, edges and distance fields, ms.
-  double align_ms = 0;       ///< Gauss-Newton alignment, ms.
-  double total_ms = 0;       ///< Whole localize() call, ms.
+  int reference_points = 0;      ///< Edge points of the finest keyframe level.
+  int search_level = 0;          ///< Deepest pyramid level the prior's uncertainty made the alignment start at.
+  int motion_search_probes = 0;  ///< Start translations probed by the motion search (0: none ran).
+  double image_shift_px = 0;     ///< Image shift the motion search measured, pixels (0: none).
+  double scene_depth_m = 0;      ///< Median depth of the keyframe render's surfaces, metres (0: none seen).
+  double render_ms = 0;          ///< Rendering keyframes on this call, ms (0 when none was made here).
+  double reference_ms = 0;       ///< Extracting their edge points, ms.
+  double live_ms = 0;            ///< Live pyramid, edges and distance fields, ms.
+  double align_ms = 0;           ///< Gauss-Newton alignment, ms.
+  double total_ms = 0;           ///< Whole localize() call, ms.
 };
 
 /// Tracks a camera through a model, one frame at a time. Thread-safety: one thread calls
