@@ -169,7 +169,7 @@ void run(const TrackArgs& a) {
       "t_ns,state,render_ms,reference_ms,live_ms,align_ms,total_ms,inlier_ratio,mean_residual_px,points,iterations,"
       "rerendered,visible_ratio,spread_ratio,chance_inlier_ratio,scale_px,keyframe_id,keyframe_age_frames,"
       "keyframe_adopted,visual_rejected,ekf_nis,inertial_sigma_m,verify_score,search_level,"
-      "search_probes,image_shift_px"));
+      "search_probes,image_shift_px,prior_restarted"));
   // The filter's output at the IMU rate (kEkf): camera pose, body velocity, 1-sigma figures.
   const std::string filter_path = (out_path.parent_path() / (out_path.stem().string() + "_filter.csv")).string();
   auto filter_out = take(PartialFileWriter::open(filter_path));
@@ -217,13 +217,13 @@ void run(const TrackArgs& a) {
       check(frames->appendLine(fmt::format(
           "{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{},{},{:."
           "4g},"
-          "{:.4g},{:.4f},{},{},{:.1f}",
+          "{:.4g},{:.4f},{},{},{:.1f},{}",
           entry.t_ns, trackingStateName(f.state), f.render_ms, f.reference_ms, f.live_ms, f.align_ms, f.total_ms,
           f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used, f.quality.iterations,
           f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio, f.quality.chance_inlier_ratio,
           f.quality.scale_px, f.keyframe_id, f.keyframe_age_frames, f.keyframe_adopted ? 1 : 0,
           f.visual_rejected ? 1 : 0, f.innovation, f.inertial_sigma_m, f.verify_score, f.search_level,
-          f.motion_search_probes, f.image_shift_px)));
+          f.motion_search_probes, f.image_shift_px, f.prior_restarted ? 1 : 0)));
       for (const FilterOutput& o : localizer->takeFilterOutputs()) {
         const Eigen::Quaterniond q(o.T_world_camera.linear());
         const Eigen::Vector3d& t = o.T_world_camera.translation();

@@ -130,6 +130,12 @@ struct LocalizerOptions {
   /// The motion search keeps the best verified result of its starts and stops at one whose
   /// verification score reaches this (true poses of the development sequences score 0.5-1).
   double motion_search_confident_score = 0.5;
+  /// Restart of the motion prior: after this many poses in a row (at most motion_search_max_gap_s
+  /// apart) that the prior's gate refused although their verification score was at least
+  /// restart_min_score, the prior restarts at the last of them with the velocity between the last
+  /// two (Localizer result prior_restarted). 0 = never.
+  int restart_after_refusals = 2;
+  double restart_min_score = 0.5;
   /// With kAuto and an Accelerator: time the CPU and device live stages + alignment on the
   /// first frame and keep the faster one (instead of deciding by the device type alone).
   bool calibrate_backend = false;
@@ -150,6 +156,8 @@ struct LocalizationResult {
   /// IMU, T_world_camera is the inertial prediction (InertialAiding); kLost: no trusted pose.
   TrackingState state = TrackingState::kLost;
   bool visual_rejected = false;  ///< The alignment tracked but lay outside the inertial gate.
+  /// The motion prior was restarted at this frame's pose (LocalizerOptions::restart_after_refusals).
+  bool prior_restarted = false;
   /// Squared Mahalanobis distance of the tracked pose to the filter's prediction (kEkf; NaN when
   /// not tested: no filter yet, or the frame was not tracked). Chi-square with 6 DOF when consistent.
   double innovation = std::numeric_limits<double>::quiet_NaN();
