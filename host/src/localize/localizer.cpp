@@ -177,7 +177,7 @@ struct Localizer::Impl {
     int64_t t_ns = 0;
     Pose T_world_camera = Pose::Identity();
     bool restarted = false;  ///< Restarted, and no pose accepted under its gate since.
-  } refused;
+  } refusals;
   int search_level = 0;  ///< This frame's alignment starts at least this deep (searchLevel).
 
   /// Pyramid level whose basin covers the prediction's uncertainty (LocalizerOptions::max_search_level).
@@ -516,7 +516,7 @@ void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vec
   m.last_t_ns.reset();
   m.tracked_since_reset = false;
   m.last_tracked_gray.reset();
-  m.refused = {};
+  m.refusals = {};
   m.motion->reset(T_world_camera, v_world_camera);  // timestamps may start over
 }
 
@@ -654,33 +654,33 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   bool restart = false;
   std::optional<Eigen::Vector3d> restart_velocity;
   if (out.visual_rejected && out.verify_score >= m.options.restart_min_score) {
-    if (m.refused.count > 0 && t_ns > m.refused.t_ns &&
-        static_cast<double>(t_ns - m.refused.t_ns) * 1e-9 <= m.options.motion_search_max_gap_s) {
-      ++m.refused.count;
-      const double dt = static_cast<double>(t_ns - m.refused.t_ns) * 1e-9;
-      restart_velocity = (track.T_world_camera.translation() - m.refused.T_world_camera.translation()) / dt;
+    if (m.refusals.count > 0 && t_ns > m.refusals.t_ns &&
+        static_cast<double>(t_ns - m.refusals.t_ns) * 1e-9 <= m.options.motion_search_max_gap_s) {
+      ++m.refusals.count;
+      const double dt = static_cast<double>(t_ns - m.refusals.t_ns) * 1e-9;
+      restart_velocity = (track.T_world_camera.translation() - m.refusals.T_world_camera.translation()) / dt;
     } else {
-      m.refused.count = 1;
+      m.refusals.count = 1;
     }
-    m.refused.t_ns = t_ns;
-    m.refused.T_world_camera = track.T_world_camera;
-    restart = m.options.restart_after_refusals > 0 && m.refused.count >= m.options.restart_after_refusals;
+    m.refusals.t_ns = t_ns;
+    m.refusals.T_world_camera = track.T_world_camera;
+    restart = m.options.restart_after_refusals > 0 && m.refusals.count >= m.options.restart_after_refusals;
   } else {
-    m.refused.count = 0;
+    m.refusals.count = 0;
   }
   if (restart) {
     m.motion->reset(track.T_world_camera, restart_velocity);
-    m.refused.count = 0;
-    m.refused.restarted = true;
+    m.refusals.count = 0;
+    m.refusals.restarted = true;
     out.visual_rejected = false;
     out.prior_restarted = true;
-  } else if (m.refused.restarted && track.state == TrackingState::kTracking && !out.visual_rejected &&
+  } else if (m.refusals.restarted && track.state == TrackingState::kTracking && !out.visual_rejected &&
              out.verify_score < m.options.verification.min_score) {
     // Until the restarted prior has a pose of its own to gate with, only verified poses are taken.
     out.visual_rejected = true;
   }
   if (track.state == TrackingState::kTracking && !out.visual_rejected) {
-    if (!out.prior_restarted && prediction && prediction->inertial) m.refused.restarted = false;
+    if (!out.prior_restarted && prediction && prediction->inertial) m.refusals.restarted = false;
     m.motion->setSceneDepth(keyframe.scene_depth_m);
     m.motion->addVisualPose(t_ns, track.T_world_camera, track.covariance);
     m.keyframes->frameTracked(track.quality);
