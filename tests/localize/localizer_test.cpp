@@ -153,6 +153,21 @@ TEST(Localizer, BadInputIsAnErrorNotACrash) {
   options = LocalizerOptions{};
   options.init_search_steps = 11;
   EXPECT_FALSE(Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr).ok());
+  // Motion search and prior restart out of range.
+  auto refused = [](void (*set)(LocalizerOptions&)) {
+    LocalizerOptions o;
+    set(o);
+    auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), o, nullptr);
+    return !created.ok() && created.error().code == ErrorCode::kInvalidArgument;
+  };
+  EXPECT_TRUE(refused([](LocalizerOptions& o) { o.motion_search_steps = -1; }));
+  EXPECT_TRUE(refused([](LocalizerOptions& o) { o.motion_search_candidates = 0; }));
+  EXPECT_TRUE(refused([](LocalizerOptions& o) { o.motion_search_max_gap_s = NAN; }));
+  EXPECT_TRUE(refused([](LocalizerOptions& o) { o.motion_search_min_response = 2.0; }));
+  EXPECT_TRUE(refused([](LocalizerOptions& o) { o.motion_search_confident_score = 1.5; }));
+  EXPECT_TRUE(refused([](LocalizerOptions& o) { o.restart_after_refusals = -1; }));
+  EXPECT_TRUE(refused([](LocalizerOptions& o) { o.restart_min_score = -0.5; }));
+  EXPECT_FALSE(refused([](LocalizerOptions& o) { o.motion_search_steps = 0; }));  // off is valid
   EXPECT_FALSE(Localizer::create(Model{}, test::localizeCamera(), LocalizerOptions{}, nullptr).ok());
   EXPECT_FALSE(parseLocalizerBackend("gpu").ok());
 }

@@ -54,10 +54,11 @@ Status validateOptions(const LocalizerOptions& o) {
   }
   if (o.motion_search_steps < 0 || o.motion_search_steps > 10 || o.motion_search_candidates < 1 ||
       o.motion_search_candidates > 50 || !finiteIn(o.motion_search_max_gap_s, 0.0, 10.0) ||
-      !finiteIn(o.motion_search_min_response, 0.0, 1.0)) {
+      !finiteIn(o.motion_search_min_response, 0.0, 1.0) || !finiteIn(o.motion_search_confident_score, 0.0, 1.0)) {
     return makeError(ErrorCode::kInvalidArgument,
                      "Localizer: need motion_search_steps in 0..10, motion_search_candidates in 1..50, "
-                     "motion_search_max_gap_s in 0..10 and motion_search_min_response in 0..1");
+                     "motion_search_max_gap_s in 0..10, motion_search_min_response and "
+                     "motion_search_confident_score in 0..1");
   }
   if (o.restart_after_refusals < 0 || !finiteIn(o.restart_min_score, 0.0, 1.0)) {
     return makeError(ErrorCode::kInvalidArgument,
