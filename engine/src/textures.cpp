@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <initializer_list>
 
 #include "vkloc/render/mipmap.hpp"
 
@@ -47,16 +48,26 @@ uint32_t slotLimitUpdateAfterBind(const VkPhysicalDeviceVulkan12Properties& p) {
 /// level in SHADER_READ_ONLY_OPTIMAL.
 void recordUpload(VkCommandBuffer cmd, const Pending& p, const Image& image, VkBuffer staging, VkDeviceSize offset,
                   bool blit) {
-  VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
-  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  b.image = image.image.get();
-  b.srcAccessMask = 0;
-  b.dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-  b.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-  b.newLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
-  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, p.level_count, 0, 1};
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0,
-                       nullptr, 1, &b);
+  // A layout transition of levels [first, first + count) of the image.
+  auto transition = [&](uint32_t first, uint32_t count, VkAccessFlags src, VkAccessFlags dst, VkImageLayout from,
+                        VkImageLayout to) {
+    VkImageMemoryBarrier b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+    b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.image = image.image.get();
+    b.srcAccessMask = src;
+    b.dstAccessMask = dst;
+    b.oldLayout = from;
+    b.newLayout = to;
+    b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, first, count, 0, 1};
+    return b;
+  };
+  auto barrier = [&](VkPipelineStageFlags src, VkPipelineStageFlags dst,
+                     std::initializer_list<VkImageMemoryBarrier> bs) {
+    vkCmdPipelineBarrier(cmd, src, dst, 0, 0, nullptr, 0, nullptr, static_cast<uint32_t>(bs.size()), bs.begin());
+  };
+  barrier(VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+          {transition(0, p.level_count, 0, VK_ACCESS_TRANSFER_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                      VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL)});
   std::vector<VkBufferImageCopy> regions;
   VkDeviceSize at = offset;
   auto add = [&](const Texture& t, uint32_t level) {
@@ -73,51 +84,35 @@ void recordUpload(VkCommandBuffer cmd, const Pending& p, const Image& image, VkB
                          static_cast<uint32_t>(regions.size()), regions.data());
 
   const uint32_t last = p.level_count - 1;
-  if (blit && last > 0) {
-    int32_t w = p.base.width, h = p.base.height;
-    for (uint32_t level = 1; level <= last; ++level) {
-      // Level - 1 is complete: make it the blit source.
-      b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, level - 1, 1, 0, 1};
-      b.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-      b.dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
-      b.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
-      b.newLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, nullptr, 0,
-                           nullptr, 1, &b);
-      const int32_t nw = std::max(1, w / 2), nh = std::max(1, h / 2);
-      VkImageBlit blit_region{};
-      blit_region.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level - 1, 0, 1};
-      blit_region.srcOffsets[1] = {w, h, 1};
-      blit_region.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level, 0, 1};
-      blit_region.dstOffsets[1] = {nw, nh, 1};
-      vkCmdBlitImage(cmd, image.image.get(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, image.image.get(),
-                     VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit_region, VK_FILTER_LINEAR);
-      w = nw;
-      h = nh;
-    }
-    // Levels 0 .. last - 1 were blit sources, the last one only written.
-    VkImageMemoryBarrier done[2] = {b, b};
-    done[0].subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, last, 0, 1};
-    done[0].srcAccessMask = VK_ACCESS_TRANSFER_READ_BIT;
-    done[0].dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
-    done[0].oldLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-    done[0].newLayout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-    done[1].subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, last, 1, 0, 1};
-    done[1].srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-    done[1].dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
-    done[1].oldLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
-    done[1].newLayout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, 0, 0, nullptr, 0,
-                         nullptr, 2, done);
+  if (!blit || last == 0) {
+    barrier(VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
+            {transition(0, p.level_count, VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_SHADER_READ_BIT,
+                        VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL)});
     return;
   }
-  b.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, p.level_count, 0, 1};
-  b.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
-  b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
-  b.oldLayout = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
-  b.newLayout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT, 0, 0, nullptr, 0,
-                       nullptr, 1, &b);
+  int32_t w = p.base.width, h = p.base.height;
+  for (uint32_t level = 1; level <= last; ++level) {
+    // Level - 1 is complete: make it the blit source.
+    barrier(VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+            {transition(level - 1, 1, VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT,
+                        VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL)});
+    const int32_t nw = std::max(1, w / 2), nh = std::max(1, h / 2);
+    VkImageBlit blit_region{};
+    blit_region.srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level - 1, 0, 1};
+    blit_region.srcOffsets[1] = {w, h, 1};
+    blit_region.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, level, 0, 1};
+    blit_region.dstOffsets[1] = {nw, nh, 1};
+    vkCmdBlitImage(cmd, image.image.get(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, image.image.get(),
+                   VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit_region, VK_FILTER_LINEAR);
+    w = nw;
+    h = nh;
+  }
+  // Levels 0 .. last - 1 were blit sources, the last one only written.
+  barrier(VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
+          {transition(0, last, VK_ACCESS_TRANSFER_READ_BIT, VK_ACCESS_SHADER_READ_BIT,
+                      VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL),
+           transition(last, 1, VK_ACCESS_TRANSFER_WRITE_BIT, VK_ACCESS_SHADER_READ_BIT,
+                      VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL)});
 }
 
 }  // namespace

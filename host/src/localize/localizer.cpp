@@ -262,32 +262,44 @@ struct Localizer::Impl {
     return r;
   }
 
-  /// Motion search (LocalizerOptions::motion_search_steps): `lost` is the frame's alignment from
-  /// `guess` (lost, or refused by the motion prior's gate: `refused`); returns it unchanged when
-  /// the search does not apply or finds nothing tracked, verified and not refused.
-  template <typename AlignFrom, typename Refused>
-  Result<TrackResult> motionSearch(const MotionPrediction& prediction, const Pose& guess, const ImageU8* gray_now,
-                                   TrackResult lost, AlignFrom& alignFrom, Refused& refused, LocalizationResult& out) {
+  /// Grid of the motion search: the deepest search level, the spacing (1.5 basins of that level at
+  /// the keyframe's scene depth, metres) and the steps each way across the view (x, y).
+  struct SearchGrid {
+    int level = 0;
+    double step_m = 0;
+    int steps[2] = {0, 0};
+  };
+  /// The grid when the prediction's uncertainty across the view spans more than one step; nullopt
+  /// when the search does not apply (off, no depth or edge points, a settled prior).
+  std::optional<SearchGrid> searchGrid(const MotionPrediction& prediction) const {
     const Keyframe& keyframe = *keyframes->current();
-    const int level = std::min(options.max_search_level, options.live.levels - 1);
-    if (options.motion_search_steps <= 0 || level < 0 || !(keyframe.scene_depth_m > 0) ||
+    SearchGrid grid;
+    grid.level = std::min(options.max_search_level, options.live.levels - 1);
+    if (options.motion_search_steps <= 0 || grid.level < 0 || !(keyframe.scene_depth_m > 0) ||
         keyframe.reference.points.size() < 6) {
-      return lost;
+      return std::nullopt;
     }
-    // Basin of the deepest level across the view, metres at the scene depth (eq. of searchLevel).
+    // Basin of the deepest level across the view, metres at the scene depth (as in searchLevel).
     const double basin_m =
-        options.search_basin_px * std::ldexp(1.0, level) / std::max(camera.fx, camera.fy) * keyframe.scene_depth_m;
-    const double step_m = 1.5 * basin_m;
-    int steps[2];
-    double spacing[2];
+        options.search_basin_px * std::ldexp(1.0, grid.level) / std::max(camera.fx, camera.fy) * keyframe.scene_depth_m;
+    grid.step_m = 1.5 * basin_m;
     for (int a = 0; a < 2; ++a) {
       const double reach = options.search_sigmas * std::sqrt(std::max(0.0, prediction.covariance(a, a)));
-      steps[a] = std::min(options.motion_search_steps, static_cast<int>(std::ceil(reach / step_m - 0.5)));
-      spacing[a] = step_m;
+      grid.steps[a] = std::min(options.motion_search_steps, static_cast<int>(std::ceil(reach / grid.step_m - 0.5)));
     }
-    if (steps[0] == 0 && steps[1] == 0) return lost;
-    VerificationOptions verification = options.verification;
-    verification.inlier_threshold_px = options.tracker.inlier_threshold_px;
+    if (grid.steps[0] == 0 && grid.steps[1] == 0) return std::nullopt;
+    return grid;
+  }
+
+  /// Motion search (LocalizerOptions::motion_search_steps) over `grid`: `lost` is the frame's
+  /// alignment from `guess` (lost, or refused by the motion prior's gate: `refused`); returns it
+  /// unchanged when the search finds nothing tracked, verified and not refused.
+  template <typename AlignFrom, typename Refused>
+  Result<TrackResult> motionSearch(const SearchGrid& grid, const MotionPrediction& prediction, const Pose& guess,
+                                   const ImageU8& gray_now, TrackResult lost, AlignFrom& alignFrom, Refused& refused,
+                                   LocalizationResult& out) {
+    const Keyframe& keyframe = *keyframes->current();
+    const VerificationOptions& verification = options.verification;
     // Many starts give many chances to converge somewhere wrong: a result must be tracked, pass
     // the prior's gate and the pose verification; the best verified one is kept, and the search
     // stops early at one verified with motion_search_confident_score.
@@ -306,12 +318,12 @@ struct Localizer::Impl {
     // scene depth (shift = -f t / depth). Motion along the view (a zoom) does not shift the
     // image: steps along it of 1.5 basins at a quarter of the image diagonal are tried in turn.
     // The shift is good to a few pixels, so these starts align from level 1 at most.
-    if (last_tracked_gray && gray_now &&
+    if (last_tracked_gray &&
         static_cast<double>(out.t_ns - last_tracked_gray->t_ns) * 1e-9 <= options.motion_search_max_gap_s) {
       const Eigen::Matrix3d R_current_previous =
           guess.linear().transpose() * last_tracked_gray->T_world_camera.linear();
       const Result<std::vector<ImageShift>> shifts =
-          estimateImageShifts(last_tracked_gray->gray, *gray_now, camera, R_current_previous);
+          estimateImageShifts(last_tracked_gray->gray, gray_now, camera, R_current_previous);
       std::vector<ImageShift> peaks;
       if (shifts.ok()) {
         for (const ImageShift& shift : *shifts) {
@@ -344,8 +356,8 @@ struct Localizer::Impl {
     }
     // Probes: a few Gauss-Newton steps on the deepest level alone, scored by their inliers there.
     EdgeTrackerOptions probe = options.tracker;
-    probe.coarsest_level = level;
-    probe.finest_level = level;
+    probe.coarsest_level = grid.level;
+    probe.finest_level = grid.level;
     probe.far_first_depth_quantile = 0;
     probe.max_iterations = 5;
     struct Candidate {
@@ -354,11 +366,11 @@ struct Localizer::Impl {
     };
     std::vector<Candidate> candidates;
     const auto t0 = SteadyClock::now();
-    for (int i = -steps[0]; i <= steps[0]; ++i) {
-      for (int j = -steps[1]; j <= steps[1]; ++j) {
+    for (int i = -grid.steps[0]; i <= grid.steps[0]; ++i) {
+      for (int j = -grid.steps[1]; j <= grid.steps[1]; ++j) {
         if (i == 0 && j == 0) continue;
         Pose start = guess;
-        start.translation() += guess.linear() * Eigen::Vector3d(i * spacing[0], j * spacing[1], 0.0);
+        start.translation() += guess.linear() * Eigen::Vector3d(i * grid.step_m, j * grid.step_m, 0.0);
         Result<TrackResult> r = active->align(keyframe.reference, start, probe);
         if (!r.ok()) return r.error();
         ++out.motion_search_probes;
@@ -446,6 +458,7 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
     impl->options.live.levels = std::max(impl->options.live.levels, std::min(8, options.max_search_level + 1));
   }
   impl->options.reference.levels = impl->options.live.levels;
+  impl->options.verification.inlier_threshold_px = options.tracker.inlier_threshold_px;
   impl->camera = camera;
   impl->initializer = Initializer(initializerOptions(options));
   if (options.inertial.filter == InertialFilter::kEkf) {
@@ -609,9 +622,12 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
     return r.state == TrackingState::kTracking &&
            !m.motion->consistent(*prediction, r.T_world_camera, r.covariance, m.keyframes->current()->scene_depth_m);
   };
-  if (!T_world_camera_guess && prediction && prediction->inertial &&
-      (track.state == TrackingState::kLost || refused(track))) {
-    Result<TrackResult> searched = m.motionSearch(*prediction, guess, &gray, std::move(track), alignFrom, refused, out);
+  // The grid first: a settled prior has none, and its frames are not tested against the gate twice.
+  const std::optional<Impl::SearchGrid> grid =
+      !T_world_camera_guess && prediction && prediction->inertial ? m.searchGrid(*prediction) : std::nullopt;
+  if (grid && (track.state == TrackingState::kLost || refused(track))) {
+    Result<TrackResult> searched =
+        m.motionSearch(*grid, *prediction, guess, gray, std::move(track), alignFrom, refused, out);
     if (!searched.ok()) return searched.error();
     track = std::move(searched).value();
   }
@@ -632,11 +648,7 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   out.covariance = track.covariance;
   out.reference_points = static_cast<int>(keyframe.reference.points.size());
   out.scene_depth_m = keyframe.scene_depth_m;
-  {
-    VerificationOptions verification = m.options.verification;
-    verification.inlier_threshold_px = m.options.tracker.inlier_threshold_px;
-    out.verify_score = verificationScore(verificationFeatures(track, keyframe.scene_depth_m), verification);
-  }
+  out.verify_score = verificationScore(verificationFeatures(track, keyframe.scene_depth_m), m.options.verification);
   out.keyframe_id = keyframe.id;
   out.keyframe_age_frames = m.frame_index - keyframe.request.frame_index;
 
