@@ -404,6 +404,7 @@ static void addBenchVerb(CLI::App& app) {
   live->callback([largs] { runLiveBench(*largs); });
 
   addVerifyBench(*bench);
+  addRelocBench(*bench);
 }
 
 VKLOC_REGISTER_VERB(90, addBenchVerb);

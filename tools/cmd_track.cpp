@@ -12,6 +12,7 @@
 #include "common.hpp"
 #include "track_overlay.hpp"
 #include "vkloc/core/atomic_file.hpp"
+#include "vkloc/core/random.hpp"
 #include "vkloc/core/se3.hpp"
 #include "vkloc/engine/gpu_accelerator.hpp"
 #include "vkloc/eval/eval.hpp"
@@ -41,6 +42,10 @@ struct TrackArgs {
   DeviceArgs device;
   bool no_vulkan = false;
   OverlayArgs overlay;
+  std::string db;            ///< Keyframe database: relocalization after a loss, global initialization.
+  bool global_init = false;  ///< Start with no pose: search the database (around the prior).
+  double prior_sigma_m = 0;  ///< > 0: a simulated GPS-like prior from the ground truth with this 1-sigma.
+  uint64_t prior_seed = 1;   ///< Seed of the simulated prior's error.
 };
 
 std::string seconds(int64_t t_ns) {
@@ -138,6 +143,40 @@ void run(const TrackArgs& a) {
   if (context) accelerator = take(makeGpuAccelerator(context));
   auto localizer = take(Localizer::create(model, camera, options, accelerator));
   localizer->reset(T_init, v_init);
+  std::string search_line;
+  if (!a.db.empty()) {
+    auto db = std::make_shared<const KeyframeDatabase>(take(KeyframeDatabase::load(a.db, modelFingerprint(model))));
+    check(localizer->setKeyframeDatabase(db));
+    search_line = fmt::format("keyframe database: {} keyframes ({})", db->size(), a.db);
+  }
+  if (a.global_init) {
+    if (a.db.empty()) throw Failure{"--global-init needs --db (vkloc keyframes build)"};
+    // The region: a GPS-like prior at the first image (prior.csv, or simulated from the ground
+    // truth with --prior-sigma), 3.37 sigma (99 % of a 3-D Gaussian); else the whole database.
+    std::optional<SearchRegion> region;
+    const int64_t t_first = seq.images[a.start_frame].t_ns;
+    if (a.prior_sigma_m > 0) {
+      const std::optional<Pose> truth = groundTruthAt(seq.groundtruth, t_first);
+      if (!truth) throw Failure{"--prior-sigma: no ground truth at the first image to simulate a prior from"};
+      Xoshiro256 rng(a.prior_seed);
+      region.emplace();
+      region->center_world =
+          truth->translation() + a.prior_sigma_m * Eigen::Vector3d(rng.gaussian(), rng.gaussian(), rng.gaussian());
+      region->radius_m = 3.37 * a.prior_sigma_m;
+    } else if (!seq.priors.empty()) {
+      auto near = std::min_element(seq.priors.begin(), seq.priors.end(), [&](const auto& x, const auto& y) {
+        return std::llabs(x.t_ns - t_first) < std::llabs(y.t_ns - t_first);
+      });
+      region.emplace();
+      region->center_world = near->p_world_body;
+      region->radius_m = 3.37 * near->sigma.maxCoeff();
+    }
+    check(localizer->startSearch(region));
+    search_line +=
+        region ? fmt::format("; global initialization within {:.1f} m of ({:.2f}, {:.2f}, {:.2f})", region->radius_m,
+                             region->center_world.x(), region->center_world.y(), region->center_world.z())
+               : "; global initialization over the whole database";
+  }
   const auto overlay = TrackOverlay::create(a.overlay, model, camera, options, seq.groundtruth);
   const double setup_ms = msSince(t_start);
 
@@ -148,6 +187,7 @@ void run(const TrackArgs& a) {
     std::printf("sequence %s: %zu of %zu images, %dx%d; model %zu triangles\n", seq.name.c_str(), total,
                 seq.images.size(), camera.width, camera.height, model.triangleCount());
     std::printf("%s\n", localizer->backendSummary().c_str());
+    if (!search_line.empty()) std::printf("%s\n", search_line.c_str());
     std::printf("inertial aiding: %s\n", use_imu ? fmt::format("on ({} IMU readings)", seq.imu.size()).c_str()
                                                  : (seq.imu.empty() ? "off (no imu.csv)" : "off (--no-imu)"));
     std::fflush(stdout);
@@ -169,7 +209,7 @@ void run(const TrackArgs& a) {
       "t_ns,state,render_ms,reference_ms,live_ms,align_ms,total_ms,inlier_ratio,mean_residual_px,points,iterations,"
       "rerendered,visible_ratio,spread_ratio,chance_inlier_ratio,scale_px,keyframe_id,keyframe_age_frames,"
       "keyframe_adopted,visual_rejected,ekf_nis,inertial_sigma_m,verify_score,search_level,"
-      "search_probes,image_shift_px,prior_restarted"));
+      "search_probes,image_shift_px,prior_restarted,relocalization_candidates,search_radius_m,relocalization_ms"));
   // The filter's output at the IMU rate (kEkf): camera pose, body velocity, 1-sigma figures.
   const std::string filter_path = (out_path.parent_path() / (out_path.stem().string() + "_filter.csv")).string();
   auto filter_out = take(PartialFileWriter::open(filter_path));
@@ -180,7 +220,7 @@ void run(const TrackArgs& a) {
   size_t last_decile = 0;
   std::vector<StampedPose> estimate;
   std::vector<double> total_ms, depths;
-  size_t lost = 0, inertial = 0, rejected = 0, rerendered = 0, lost_after_first = 0;
+  size_t lost = 0, inertial = 0, rejected = 0, rerendered = 0, lost_after_first = 0, relocalized = 0, initializing = 0;
   // Readings from one frame interval before the first image tracked on (the filter starts there).
   size_t next_imu = 0;
   if (first > 0) {
@@ -201,8 +241,10 @@ void run(const TrackArgs& a) {
       Result<LocalizationResult> r = localizer->localize(entry.t_ns, gray);
       if (!r.ok()) throw Failure{fmt::format("{}: frame {}: {}", seq.imagePath(i), i, r.error().message)};
       const LocalizationResult& f = *r;
-      const bool tracking = f.state == TrackingState::kTracking;
+      const bool tracking = f.state == TrackingState::kTracking || f.state == TrackingState::kRelocalized;
       const bool has_pose = tracking || f.state == TrackingState::kInertial;
+      relocalized += f.state == TrackingState::kRelocalized;
+      initializing += f.state == TrackingState::kInitializing;
       if (tracking && first_tracked < 0) first_tracked = static_cast<long>(i);
       lost_after_first += !has_pose && first_tracked >= 0;
       inertial += f.state == TrackingState::kInertial;
@@ -210,20 +252,21 @@ void run(const TrackArgs& a) {
       if (has_pose) {
         check(traj->appendLine(fmt::format("{} {}", seconds(entry.t_ns), formatPose(f.T_world_camera))));
         estimate.push_back({entry.t_ns, f.T_world_camera});
-      } else {
+      } else if (f.state != TrackingState::kInitializing) {  // frames before a first pose are counted apart
         ++lost;
       }
       rerendered += f.reference_rendered;
       check(frames->appendLine(fmt::format(
           "{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{},{},{:."
           "4g},"
-          "{:.4g},{:.4f},{},{},{:.1f},{}",
+          "{:.4g},{:.4f},{},{},{:.1f},{},{},{:.4g},{:.1f}",
           entry.t_ns, trackingStateName(f.state), f.render_ms, f.reference_ms, f.live_ms, f.align_ms, f.total_ms,
           f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used, f.quality.iterations,
           f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio, f.quality.chance_inlier_ratio,
           f.quality.scale_px, f.keyframe_id, f.keyframe_age_frames, f.keyframe_adopted ? 1 : 0,
           f.visual_rejected ? 1 : 0, f.innovation, f.inertial_sigma_m, f.verify_score, f.search_level,
-          f.motion_search_probes, f.image_shift_px, f.prior_restarted ? 1 : 0)));
+          f.motion_search_probes, f.image_shift_px, f.prior_restarted ? 1 : 0, f.relocalization_candidates,
+          f.search_radius_m, f.relocalization_ms)));
       for (const FilterOutput& o : localizer->takeFilterOutputs()) {
         const Eigen::Quaterniond q(o.T_world_camera.linear());
         const Eigen::Vector3d& t = o.T_world_camera.translation();
@@ -286,10 +329,10 @@ void run(const TrackArgs& a) {
       "  \"policy\": \"{}\",\n  \"startup_ms\": {:.1f},\n  \"first_frame_ms\": {:.1f},\n  \"median_frame_ms\": "
       "{:.3f},\n"
       "  \"hz_median\": {:.3f},\n  \"first_tracked_frame\": {},\n  \"lost_after_first_tracked\": {},\n  "
-      "\"scene_depth_median_m\": {:.6g}",
+      "\"scene_depth_median_m\": {:.6g},\n  \"relocalized\": {},\n  \"initializing\": {}",
       seq.name, total, lost, inertial, rejected, rerendered, localizerBackendName(options.backend), a.localizer.policy,
       setup_ms, first_frame_ms, total_ms.empty() ? 0.0 : median(total_ms), hz, first_tracked, lost_after_first,
-      median(depths));
+      median(depths), relocalized, initializing);
   std::filesystem::path report_dir = a.report_dir.empty()
                                          ? out_path.parent_path() / (out_path.stem().string() + "_report")
                                          : std::filesystem::path(a.report_dir);
@@ -346,10 +389,12 @@ void run(const TrackArgs& a) {
   summary += "\n}\n";
   check(writeReportFile((report_dir / "track.json").string(), summary));
   std::printf(
-      "tracked %zu frames, %zu lost, %zu inertial only, %zu references rendered: %.1f Hz (median %.1f ms per frame "
+      "tracked %zu frames, %zu lost, %zu inertial only, %zu relocalized, %zu initializing, %zu references rendered: "
+      "%.1f Hz (median %.1f ms per frame "
       "after the first); "
       "start-up %.0f ms, first frame %.0f ms (includes shader compilation)\n",
-      total, lost, inertial, rerendered, hz, total_ms.empty() ? 0.0 : median(total_ms), setup_ms, first_frame_ms);
+      total, lost, inertial, relocalized, initializing, rerendered, hz, total_ms.empty() ? 0.0 : median(total_ms),
+      setup_ms, first_frame_ms);
   std::printf("wrote %s and %s\n", a.out.c_str(), frames_path.c_str());
 }
 
@@ -380,6 +425,15 @@ void addTrackOptions(CLI::App* cmd, const std::shared_ptr<TrackArgs>& args) {
       ->capture_default_str();
   cmd->add_flag("--no-vulkan", args->no_vulkan, "Render with the CPU reference rasterizer (slow)");
   cmd->add_flag("--quiet,-q", args->quiet, "Print only the final line");
+  cmd->add_option("--db", args->db,
+                  "Keyframe database (vkloc keyframes build): relocalize after a loss, and --global-init");
+  cmd->add_flag(
+      "--global-init", args->global_init,
+      "Start with no pose: search the database around the prior (prior.csv or --prior-sigma), else all of it");
+  cmd->add_option("--prior-sigma", args->prior_sigma_m,
+                  "With --global-init: a GPS-like prior simulated from the ground truth with this 1-sigma, metres")
+      ->check(CLI::Range(0.0, 1e6));
+  cmd->add_option("--prior-seed", args->prior_seed, "Seed of the simulated prior's error")->capture_default_str();
   args->device.add(*cmd);
   args->overlay.add(*cmd);
 }

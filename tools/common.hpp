@@ -123,5 +123,7 @@ std::optional<Pose> groundTruthAt(const std::vector<StampedPose>& gt, int64_t t_
 
 /// Adds `vkloc bench verify` (cmd_bench_verify.cpp) to the bench verb.
 void addVerifyBench(CLI::App& bench);
+/// Adds `vkloc bench reloc` (cmd_bench_reloc.cpp) to the bench verb.
+void addRelocBench(CLI::App& bench);
 
 }  // namespace vkloc::cli

@@ -64,6 +64,19 @@ Status validateOptions(const LocalizerOptions& o) {
     return makeError(ErrorCode::kInvalidArgument,
                      "Localizer: need restart_after_refusals >= 0 and restart_min_score in 0..1");
   }
+  const RelocalizationOptions& l = o.relocalization;
+  if (l.candidates < 1 || l.candidates > 100 || l.refined_probes < 1 || l.refined_probes > 100 || l.depth_steps < 0 ||
+      l.depth_steps > 5 || !finiteIn(l.depth_step, 0.0, 1.0) || l.after_untracked_frames < 0 || l.refinements < 0 ||
+      l.refinements > 10 || l.shift_starts < 0 || l.shift_starts > 5 || !finiteIn(l.min_radius_m, 0.0, 1e7) ||
+      !finiteIn(l.growth_m_s, 0.0, 1e4) || !finiteIn(l.max_radius_m, 0.0, 1e7) ||
+      !finiteIn(l.min_contrast, 0.0, 255.0) || !finiteIn(l.min_score, 0.0, 1.0) ||
+      !finiteIn(l.confident_score, 0.0, 1.0) || !finiteIn(l.min_response, 0.0, 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "Localizer: relocalization needs candidates and refined_probes in 1..100, depth_steps in 0..5, "
+                     "depth_step in 0..1, after_untracked_frames >= 0, refinements "
+                     "in 0..10, shift_starts in 0..5, radii and growth >= 0, min_contrast in 0..255 and scores and "
+                     "min_response in 0..1");
+  }
   if (!finiteIn(o.max_point_motion_px, 0.0, 1e6)) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: max_point_motion_px must be in 0..1e6");
   }
@@ -181,6 +194,16 @@ struct Localizer::Impl {
   } refusals;
   int search_level = 0;  ///< This frame's alignment starts at least this deep (searchLevel).
 
+  // Relocalization and global initialization (RelocalizationOptions).
+  std::shared_ptr<const KeyframeDatabase> database;
+  uint64_t model_fingerprint = 0;
+  bool searching = false;                     ///< Global initialization in progress (startSearch).
+  std::optional<SearchRegion> search_region;  ///< Its region (nullopt: the whole database).
+  bool relocalizing = false;                  ///< A relocalization search is aligning (no point filter).
+  int untracked = 0;                          ///< Frames in a row not tracked.
+  int failed_searches = 0;                    ///< Searches since the last tracked frame that found nothing.
+  std::optional<int64_t> last_tracked_t_ns;   ///< Time of the last tracked frame.
+
   /// Pyramid level whose basin covers the prediction's uncertainty (LocalizerOptions::max_search_level).
   int searchLevel(const std::optional<MotionPrediction>& prediction, double scene_depth_m) const {
     if (!prediction || !prediction->inertial || options.max_search_level <= 0) return 0;
@@ -247,7 +270,7 @@ struct Localizer::Impl {
     t0 = SteadyClock::now();
     std::optional<EdgeReference> slow;
     const std::optional<Pose> last_pose = motion->lastPose();
-    if (options.max_point_motion_px > 0 && last_pose && tracked_since_reset) {
+    if (options.max_point_motion_px > 0 && last_pose && tracked_since_reset && !relocalizing) {
       slow = slowPoints(reference, start, *last_pose, options.max_point_motion_px);
     }
     EdgeTrackerOptions tracker = options.tracker;
@@ -389,6 +412,196 @@ struct Localizer::Impl {
     return best ? std::move(*best) : std::move(lost);
   }
 
+  /// Relocalization search (RelocalizationOptions) of this frame in `region` (nullopt: the whole
+  /// database). True with `found` and its keyframe current when a pose reached min_score; false
+  /// when none did (or the frame has too little contrast), the keyframes then reset.
+  Result<bool> relocalize(const ImageU8& gray, int64_t t_ns, const std::optional<SearchRegion>& region,
+                          TrackResult& found, LocalizationResult& out) {
+    const RelocalizationOptions& o = options.relocalization;
+    const auto t0 = SteadyClock::now();
+    out.search_radius_m = region ? region->radius_m : std::numeric_limits<double>::infinity();
+    Result<ImageU8> thumbnail = descriptorThumbnail(gray);
+    if (!thumbnail.ok()) return thumbnail.error();
+    if (thumbnailContrast(*thumbnail) < o.min_contrast) {
+      out.relocalization_ms = msSince(t0);
+      return false;  // nothing to recognise: black, saturated, blank
+    }
+    Result<GlobalDescriptor> descriptor = globalDescriptor(gray);
+    if (!descriptor.ok()) return descriptor.error();
+    const std::vector<KeyframeCandidate> candidates =
+        database->query(*descriptor, static_cast<size_t>(o.candidates), region);
+    keyframes->reset();
+    uploaded_id = 0;
+    const int deepest = std::max(0, std::min(options.max_search_level, options.live.levels - 1));
+    const int saved_level = search_level;
+    relocalizing = true;
+    struct Restore {
+      Impl& m;
+      int level;
+      ~Restore() {
+        m.search_level = level;
+        m.relocalizing = false;
+      }
+    } restore{*this, saved_level};
+    auto alignAt = [&](const Pose& start, int level) {
+      search_level = level;
+      return align(*active, gray, start, out, live_ready);
+    };
+    // Stage 1: a keyframe at each candidate; starts at its pose and at that pose turned by the
+    // image shifts between its render and the live image; each start probed with a few
+    // Gauss-Newton steps on the deepest level alone and scored there.
+    if (!live_ready) {
+      const auto t_live = SteadyClock::now();
+      VKLOC_TRY_STATUS(active->setLiveImage(gray));
+      live_ready = true;
+      out.live_ms += msSince(t_live);
+    }
+    EdgeTrackerOptions probe = options.tracker;
+    probe.coarsest_level = deepest;
+    probe.finest_level = deepest;
+    probe.far_first_depth_quantile = 0;
+    probe.max_iterations = 10;
+    struct Probe {
+      std::shared_ptr<const Keyframe> keyframe;
+      Pose start = Pose::Identity();
+      double inliers = 0;  ///< Above chance, on the deepest level.
+    };
+    std::vector<Probe> probes;
+    KeyframeRequest request;
+    request.t_ns = t_ns;
+    request.frame_index = frame_index;
+    for (const KeyframeCandidate& c : candidates) {
+      ++out.relocalization_candidates;
+      const Pose& T_candidate = database->keyframes()[c.index].T_world_camera;
+      request.T_world_ref = T_candidate;
+      request.keep_gray = o.shift_starts > 0;
+      VKLOC_TRY_STATUS(keyframes->makeNow(request, out.render_ms, out.reference_ms));
+      out.reference_rendered = true;
+      const std::shared_ptr<const Keyframe> keyframe = keyframes->current();
+      if (keyframe->reference.points.size() < 6) continue;
+      std::vector<Pose> starts{T_candidate};
+      if (o.shift_starts > 0 && !keyframe->gray.data.empty()) {
+        // The candidate render's principal ray is seen at the principal point + (dx, dy) in the
+        // live view: the start turned so that it is (the rotation left between the two views; a
+        // shift from a translation across the view is turned into a rotation too, which the
+        // alignment's basin takes).
+        Result<std::vector<ImageShift>> shifts =
+            estimateImageShifts(keyframe->gray, gray, camera, Eigen::Matrix3d::Identity(), 2, o.shift_starts);
+        if (shifts.ok()) {
+          for (const ImageShift& shift : *shifts) {
+            if (shift.response < o.min_response) continue;
+            const Eigen::Vector3d ray_live =
+                Eigen::Vector3d(shift.dx_px / camera.fx, shift.dy_px / camera.fy, 1.0).normalized();
+            const Eigen::Matrix3d R_live_candidate =
+                Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), ray_live).toRotationMatrix();
+            Pose start = T_candidate;
+            start.linear() = T_candidate.linear() * R_live_candidate.transpose();
+            starts.push_back(start);
+          }
+        }
+      }
+      // Motion along the view does not shift the image: each start also at +-depth_steps x
+      // depth_step of the candidate's scene depth along its optical axis.
+      const size_t turned = starts.size();
+      for (size_t k = 0; k < turned; ++k) {
+        for (int step = 1; step <= o.depth_steps; ++step) {
+          for (int sign : {1, -1}) {
+            Pose start = starts[k];
+            start.translation() += start.linear().col(2) * (sign * step * o.depth_step * keyframe->scene_depth_m);
+            starts.push_back(start);
+          }
+        }
+      }
+      const auto t_probe = SteadyClock::now();
+      for (const Pose& start : starts) {
+        Result<TrackResult> r = active->align(keyframe->reference, start, probe);
+        if (!r.ok()) return r.error();
+        Probe p;
+        p.keyframe = keyframe;
+        p.start = r->T_world_camera;
+        // Inliers beyond those a random pose would have (the scene's own edge density).
+        p.inliers = (r->quality.inlier_ratio - r->quality.chance_inlier_ratio) * r->quality.points_in_image;
+        if (isValidPose(p.start)) probes.push_back(std::move(p));
+      }
+      out.align_ms += msSince(t_probe);
+    }
+    // Stage 2: the best probes aligned fully, refined against keyframes rendered at the estimate
+    // (the candidate's may be a metre off) and verified.
+    std::sort(probes.begin(), probes.end(), [](const Probe& a, const Probe& b) { return a.inliers > b.inliers; });
+    if (probes.size() > static_cast<size_t>(o.refined_probes)) probes.resize(static_cast<size_t>(o.refined_probes));
+    std::shared_ptr<const Keyframe> best_keyframe;
+    double best_score = 0;
+    bool have = false;
+    request.keep_gray = false;
+    for (const Probe& p : probes) {
+      if (best_score >= o.confident_score) break;
+      keyframes->restore(p.keyframe);
+      VKLOC_TRY_STATUS(uploadKeyframe());
+      Result<TrackResult> r = alignAt(p.start, std::min(1, deepest));
+      if (!r.ok()) return r.error();
+      TrackResult track = std::move(r).value();
+      for (int k = 0; k < o.refinements && isValidPose(track.T_world_camera); ++k) {
+        request.T_world_ref = track.T_world_camera;
+        VKLOC_TRY_STATUS(keyframes->makeNow(request, out.render_ms, out.reference_ms));
+        VKLOC_TRY_STATUS(uploadKeyframe());
+        Result<TrackResult> again = alignAt(track.T_world_camera, 0);
+        if (!again.ok()) return again.error();
+        track = std::move(again).value();
+      }
+      const double score =
+          verificationScore(verificationFeatures(track, keyframes->current()->scene_depth_m), options.verification);
+      if (track.state != TrackingState::kTracking) continue;
+      if (score >= o.min_score && score > best_score) {
+        found = std::move(track);
+        best_score = score;
+        best_keyframe = keyframes->current();
+        have = true;
+      }
+    }
+    if (have) {
+      keyframes->restore(best_keyframe);
+      VKLOC_TRY_STATUS(uploadKeyframe());
+    } else {
+      keyframes->reset();
+      uploaded_id = 0;
+    }
+    out.relocalization_ms = msSince(t0);
+    return have;
+  }
+
+  /// Takes a relocalized pose; the frame counts as tracked. The motion prior restarts there
+  /// (velocity unknown) unless `prediction` is an IMU prediction the pose agrees with (its gate):
+  /// a prior that bridged the loss keeps its velocity.
+  void adoptRelocalized(const TrackResult& track, int64_t t_ns, const ImageU8& gray,
+                        const std::optional<MotionPrediction>& prediction, LocalizationResult& out) {
+    const Keyframe& keyframe = *keyframes->current();
+    const bool agrees = prediction && prediction->inertial &&
+                        motion->consistent(*prediction, track.T_world_camera, track.covariance, keyframe.scene_depth_m);
+    if (!agrees) motion->reset(track.T_world_camera, std::nullopt);
+    motion->setSceneDepth(keyframe.scene_depth_m);
+    motion->addVisualPose(t_ns, track.T_world_camera, track.covariance);
+    keyframes->frameTracked(track.quality);
+    tracked_since_reset = true;
+    refusals = {};
+    untracked = 0;
+    failed_searches = 0;
+    last_tracked_t_ns = t_ns;
+    if (!last_tracked_gray) last_tracked_gray.emplace();
+    last_tracked_gray->gray = gray;
+    last_tracked_gray->T_world_camera = track.T_world_camera;
+    last_tracked_gray->t_ns = t_ns;
+    out.state = TrackingState::kRelocalized;
+    out.T_world_camera = track.T_world_camera;
+    out.covariance = track.covariance;
+    out.quality = track.quality;
+    out.visual_rejected = false;
+    out.scene_depth_m = keyframe.scene_depth_m;
+    out.reference_points = static_cast<int>(keyframe.reference.points.size());
+    out.verify_score = verificationScore(verificationFeatures(track, keyframe.scene_depth_m), options.verification);
+    out.keyframe_id = keyframe.id;
+    out.keyframe_age_frames = frame_index - keyframe.request.frame_index;
+  }
+
   /// First-frame calibration of kAuto with calibrate_backend: run both and keep the faster.
   Status calibrate(const ImageU8& gray, const Pose& guess) {
     calibration_pending = false;
@@ -460,6 +673,7 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
   impl->options.reference.levels = impl->options.live.levels;
   impl->options.verification.inlier_threshold_px = options.tracker.inlier_threshold_px;
   impl->camera = camera;
+  impl->model_fingerprint = modelFingerprint(model);
   impl->initializer = Initializer(initializerOptions(options));
   if (options.inertial.filter == InertialFilter::kEkf) {
     impl->motion = std::make_unique<EkfPrior>(options.inertial, options.motion);
@@ -531,7 +745,51 @@ void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vec
   m.tracked_since_reset = false;
   m.last_tracked_gray.reset();
   m.refusals = {};
+  m.searching = false;
+  m.search_region.reset();
+  m.untracked = 0;
+  m.failed_searches = 0;
+  m.last_tracked_t_ns.reset();
   m.motion->reset(T_world_camera, v_world_camera);  // timestamps may start over
+}
+
+Status Localizer::setKeyframeDatabase(std::shared_ptr<const KeyframeDatabase> database) {
+  Impl& m = *impl_;
+  if (database) {
+    if (database->modelFingerprint() != m.model_fingerprint) {
+      return makeError(ErrorCode::kInvalidArgument,
+                       "Localizer: the keyframe database was built for another model (or another placement of it)");
+    }
+    const PinholeCamera& c = database->camera();
+    const double fov_ratio_x = (c.fx / c.width) / (m.camera.fx / m.camera.width);
+    const double fov_ratio_y = (c.fy / c.height) / (m.camera.fy / m.camera.height);
+    if (std::abs(fov_ratio_x - 1.0) > 0.05 || std::abs(fov_ratio_y - 1.0) > 0.05) {
+      return makeError(ErrorCode::kInvalidArgument,
+                       fmt::format("Localizer: the keyframe database was built for a camera of another field of view "
+                                   "(fx/width {:.4g}, this camera's {:.4g})",
+                                   c.fx / c.width, m.camera.fx / m.camera.width));
+    }
+  }
+  m.database = std::move(database);
+  if (!m.database) m.searching = false;
+  return Status::success();
+}
+
+Status Localizer::startSearch(const std::optional<SearchRegion>& region) {
+  Impl& m = *impl_;
+  if (!m.database) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "Localizer: a search needs a keyframe database (setKeyframeDatabase)");
+  }
+  if (region && (!region->center_world.allFinite() || std::isnan(region->radius_m) || !(region->radius_m >= 0))) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "Localizer: the search region must have a finite centre and radius >= 0");
+  }
+  reset(Pose::Identity());
+  m.motion->reset(std::nullopt, std::nullopt);  // no pose until the search finds one
+  m.searching = true;
+  m.search_region = region;
+  return Status::success();
 }
 
 Status Localizer::addImu(const ImuSample& sample) { return impl_->motion->addImu(sample); }
@@ -570,11 +828,31 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   if (T_world_camera_guess && !isValidPose(*T_world_camera_guess)) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: the pose guess is not a finite rigid transform");
   }
-  if (!T_world_camera_guess && !m.motion->lastPose()) {
+  if (!T_world_camera_guess && !m.motion->lastPose() && !m.searching) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: no pose guess and no previous pose; call reset() first");
   }
   ++m.frame_index;
   if (m.last_t_ns) m.frame_interval_ns = t_ns - *m.last_t_ns;
+
+  // 0. Global initialization (startSearch): the frame is searched in the region until a pose is
+  // verified; a guess given meanwhile ends the search (a user's or a GPS's pose).
+  if (m.searching && T_world_camera_guess) m.searching = false;
+  if (m.searching) {
+    LocalizationResult out;
+    out.t_ns = t_ns;
+    out.state = TrackingState::kInitializing;
+    m.live_ready = false;
+    m.last_t_ns = t_ns;
+    TrackResult found;
+    Result<bool> searched = m.relocalize(gray, t_ns, m.search_region, found, out);
+    if (!searched.ok()) return searched.error();
+    if (*searched) {
+      m.searching = false;
+      m.adoptRelocalized(found, t_ns, gray, std::nullopt, out);
+    }
+    out.total_ms = msSince(t_start);
+    return out;
+  }
 
   // 1. The guess: the caller's, else the motion prior's (IMU-propagated when it can).
   const std::optional<MotionPrediction> prediction = m.motion->predict(t_ns);
@@ -651,6 +929,13 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   out.verify_score = verificationScore(verificationFeatures(track, keyframe.scene_depth_m), m.options.verification);
   out.keyframe_id = keyframe.id;
   out.keyframe_age_frames = m.frame_index - keyframe.request.frame_index;
+  // After a loss the prediction may be far off and the alignment may lock onto wrong edges:
+  // with a database to relocalize from, a pose is taken only when it is verified.
+  if (m.database && m.untracked > 0 && track.state == TrackingState::kTracking &&
+      out.verify_score < m.options.verification.min_score) {
+    track.state = TrackingState::kLost;
+    out.state = TrackingState::kLost;
+  }
 
   // 5. The motion prior takes the pose (consistency gate with the IMU) or bridges the frame.
   if (prediction && prediction->inertial) {
@@ -712,6 +997,35 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
       out.covariance = bridged->covariance;
     } else {
       out.state = TrackingState::kLost;
+    }
+  }
+
+  // 5b. Relocalization (with a keyframe database): a frame not tracked after
+  // after_untracked_frames in a row is searched for around the prediction, in a region that
+  // grows with the time since the last tracked frame, the prediction's uncertainty and every
+  // search that found nothing.
+  if (out.state == TrackingState::kTracking) {
+    m.untracked = 0;
+    m.failed_searches = 0;
+    m.last_tracked_t_ns = t_ns;
+  } else {
+    ++m.untracked;
+    const RelocalizationOptions& o = m.options.relocalization;
+    if (m.database && o.after_untracked_frames > 0 && m.untracked >= o.after_untracked_frames) {
+      const double since_s = m.last_tracked_t_ns ? static_cast<double>(t_ns - *m.last_tracked_t_ns) * 1e-9 : 0.0;
+      SearchRegion region;
+      region.center_world = guess.translation();
+      region.radius_m =
+          std::min(o.max_radius_m, (o.min_radius_m + o.growth_m_s * since_s + 3.0 * out.inertial_sigma_m) *
+                                       std::ldexp(1.0, std::min(m.failed_searches, 30)));
+      TrackResult found;
+      Result<bool> searched = m.relocalize(gray, t_ns, region, found, out);
+      if (!searched.ok()) return searched.error();
+      if (*searched) {
+        m.adoptRelocalized(found, t_ns, gray, T_world_camera_guess ? std::nullopt : prediction, out);
+      } else {
+        ++m.failed_searches;
+      }
     }
   }
 

@@ -219,6 +219,10 @@ const char* trackingStateName(TrackingState state) {
       return "lost";
     case TrackingState::kInertial:
       return "inertial";
+    case TrackingState::kInitializing:
+      return "initializing";
+    case TrackingState::kRelocalized:
+      return "relocalized";
   }
   return "?";
 }

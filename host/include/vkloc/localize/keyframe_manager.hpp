@@ -99,6 +99,11 @@ class KeyframeManager {
   bool request(KeyframeRequest request);
   /// Worker mode: makes the newest finished keyframe current; returns whether it changed.
   Result<bool> adoptFinished();
+  /// Makes an earlier keyframe current again (a search going back to a candidate's). Null is
+  /// ignored.
+  void restore(std::shared_ptr<const Keyframe> keyframe) {
+    if (keyframe) setCurrent(std::move(keyframe));
+  }
 
   /// Frame outcomes (each frame reports one): tracked with `quality` (edge kinds are learnt
   /// from it), or not tracked.

@@ -33,6 +33,7 @@
 #include "vkloc/core/status.hpp"
 #include "vkloc/fusion/sensors.hpp"
 #include "vkloc/localize/initializer.hpp"
+#include "vkloc/localize/keyframe_database.hpp"
 #include "vkloc/localize/keyframe_manager.hpp"
 #include "vkloc/localize/motion_prior.hpp"
 #include "vkloc/model/model.hpp"
@@ -55,6 +56,47 @@ enum class LocalizerBackend {
 /// Parses "auto" | "vulkan" | "cpu"; kInvalidArgument otherwise.
 Result<LocalizerBackend> parseLocalizerBackend(const std::string& name);
 const char* localizerBackendName(LocalizerBackend backend);
+
+/// Relocalization and global initialization from a keyframe database (seed 001 sec. II-D;
+/// Localizer::setKeyframeDatabase). A search takes the database's keyframes nearest to the live
+/// image's descriptor in a region, renders a keyframe at each in turn, turns it by the image shift
+/// between that render and the live image (phase correlation: the rotation left), aligns from
+/// the deepest search level, refines against keyframes rendered at the estimate and keeps the
+/// best pose whose verification score reaches min_score. The keyframes' starts are first probed
+/// on the deepest level alone; only the best refined_probes are aligned fully.
+struct RelocalizationOptions {
+  int candidates = 6;  ///< Database keyframes aligned per search, nearest descriptor first (1..100).
+  /// After a loss: search on the frame that makes this many untracked frames in a row (tracked
+  /// frames neither lost nor bridged by the IMU). 0 = never relocalize after a loss.
+  int after_untracked_frames = 1;
+  /// Radius of the region searched after a loss, around the motion prior's prediction: min_radius_m
+  /// + growth_m_s x the seconds since the last tracked frame + 3 x the prediction's 1-sigma, doubled
+  /// with every search that found nothing since (a camera that jumped), at most max_radius_m.
+  double min_radius_m = 2.0;
+  double growth_m_s = 2.0;
+  double max_radius_m = 1e4;
+  /// Frames whose thumbnail's contrast (thumbnailContrast) is below this have nothing to
+  /// recognise (black, saturated, a blank wall): no search runs on them.
+  double min_contrast = 4.0;
+  /// Verification score a relocalized pose needs: more than tracking's, as a search has many
+  /// chances to converge somewhere wrong (wrong places of a room score up to ~0.55).
+  double min_score = 0.6;
+  /// A search stops at a pose verified with this score.
+  double confident_score = 0.75;
+  /// Starts (of all candidates) aligned fully after the probes on the deepest level, most
+  /// inliers above chance first (1..100).
+  int refined_probes = 4;
+  /// Each start is also probed this many steps of depth_step x the candidate's scene depth
+  /// forwards and backwards along its optical axis (a shift of the image cannot show that).
+  int depth_steps = 1;
+  double depth_step = 0.2;
+  /// Refinements against keyframes rendered at the estimate, per fully aligned start (0..10).
+  int refinements = 2;
+  /// Phase-correlation peaks between a candidate's render and the live image tried as starts
+  /// (besides the candidate's own pose), with at least min_response (0..1).
+  int shift_starts = 2;
+  double min_response = 0.05;
+};
 
 /// Everything the Localizer can be tuned with. Plain data; checked by Localizer::create.
 struct LocalizerOptions {
@@ -139,6 +181,8 @@ struct LocalizerOptions {
   /// With kAuto and an Accelerator: time the CPU and device live stages + alignment on the
   /// first frame and keep the faster one (instead of deciding by the device type alone).
   bool calibrate_backend = false;
+  /// Relocalization and global initialization (used only when a keyframe database is given).
+  RelocalizationOptions relocalization;
 };
 
 /// Outcome of one localized frame.
@@ -173,12 +217,17 @@ struct LocalizationResult {
   int search_level = 0;          ///< Deepest pyramid level the prior's uncertainty made the alignment start at.
   int motion_search_probes = 0;  ///< Start translations probed by the motion search (0: none ran).
   double image_shift_px = 0;     ///< Image shift the motion search measured, pixels (0: none).
-  double scene_depth_m = 0;      ///< Median depth of the keyframe render's surfaces, metres (0: none seen).
-  double render_ms = 0;          ///< Rendering keyframes on this call, ms (0 when none was made here).
-  double reference_ms = 0;       ///< Extracting their edge points, ms.
-  double live_ms = 0;            ///< Live pyramid, edges and distance fields, ms.
-  double align_ms = 0;           ///< Gauss-Newton alignment, ms.
-  double total_ms = 0;           ///< Whole localize() call, ms.
+  /// Database keyframes aligned by a relocalization search on this frame (0: none ran), the
+  /// radius of its region (metres; infinite: the whole database) and its time (ms, in total_ms).
+  int relocalization_candidates = 0;
+  double search_radius_m = 0;
+  double relocalization_ms = 0;
+  double scene_depth_m = 0;  ///< Median depth of the keyframe render's surfaces, metres (0: none seen).
+  double render_ms = 0;      ///< Rendering keyframes on this call, ms (0 when none was made here).
+  double reference_ms = 0;   ///< Extracting their edge points, ms.
+  double live_ms = 0;        ///< Live pyramid, edges and distance fields, ms.
+  double align_ms = 0;       ///< Gauss-Newton alignment, ms.
+  double total_ms = 0;       ///< Whole localize() call, ms.
 };
 
 /// Tracks a camera through a model, one frame at a time. Thread-safety: one thread calls
@@ -218,6 +267,16 @@ class Localizer {
   /// camera's velocity in the world frame (m/s) when known (a camera already in motion), else
   /// the motion prior starts from an unknown velocity.
   void reset(const Pose& T_world_camera, const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt);
+
+  /// Gives the keyframe database that relocalization and global initialization search (null:
+  /// none; they are off). Shared, not copied. kInvalidArgument when it was built for another
+  /// model, or for a camera whose field of view differs from this one's by more than 5 %.
+  Status setKeyframeDatabase(std::shared_ptr<const KeyframeDatabase> database);
+  /// Global initialization: forgets the pose and searches the following frames in `region` (a
+  /// GPS-like prior; the whole database when nullopt) until a pose is verified (state
+  /// kRelocalized), then tracks on. Frames before are kInitializing. localize() then needs no
+  /// guess. kInvalidArgument without a database or for a non-finite region.
+  Status startSearch(const std::optional<SearchRegion>& region);
 
   /// One line: renderer, live/alignment backend and why it was chosen, keyframe policy and threading.
   std::string backendSummary() const;

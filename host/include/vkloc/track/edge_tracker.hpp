@@ -137,9 +137,14 @@ enum class TrackingState {
   kTracking,  ///< The alignment is trusted.
   kLost,      ///< No trusted pose.
   kInertial,  ///< Localizer only: the pose is the IMU prediction (see InertialAiding).
+  /// Localizer only: searching for a first pose (global initialization), none found yet.
+  kInitializing,
+  /// Localizer only: the pose was found anew from the keyframe database and verified (after a
+  /// loss, or the first pose of a global initialization); trusted as kTracking is.
+  kRelocalized,
 };
 
-/// "tracking" | "lost" | "inertial" (the frames log's state column).
+/// "tracking" | "lost" | "inertial" | "initializing" | "relocalized" (the frames log's state column).
 const char* trackingStateName(TrackingState state);
 
 /// How well the final pose explains the live edges, measured on the finest level used.

@@ -1,0 +1,384 @@
+// Tests of the keyframe database: descriptors, the placement of virtual cameras, queries, the
+// file format and what it refuses, and relocalization / global initialization through the
+// Localizer on the CPU reference renderer (no Vulkan).
+#include "vkloc/localize/keyframe_database.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+
+#include "localize/localize_scene.hpp"
+#include "vkloc/core/text.hpp"
+#include "vkloc/localize/localizer.hpp"
+#include "vkloc/render/cpu_renderer.hpp"
+
+namespace vkloc {
+namespace {
+
+std::string tempPath(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("vkloc_kdb_" + std::to_string(::getpid()) + "_" + name)).string();
+}
+
+/// Virtual cameras around the box scene of the Localizer tests (ring of heights 1.0-1.4 m).
+KeyframePlacement boxPlacement() {
+  KeyframePlacement p;
+  p.volume.min = {-2.2f, -2.2f, 1.0f};
+  p.volume.max = {2.2f, 2.2f, 1.4f};
+  p.spacing_m = 0.4;
+  p.up_world = Eigen::Vector3d::UnitZ();
+  p.headings = 16;
+  p.tilts_deg = {25.0, 40.0};
+  // The analytic scenes' quads are not wound for back-face culling (see appendQuad).
+  p.max_back_face_fraction = 1.0;
+  return p;
+}
+
+/// The box scene's database, built once per process.
+const std::shared_ptr<const KeyframeDatabase>& boxDatabase() {
+  static std::shared_ptr<const KeyframeDatabase> db = [] {
+    const Model model = test::makeBoxOnGround();
+    auto r0 = CpuRenderer::create(model);
+    auto r1 = CpuRenderer::create(model);
+    EXPECT_TRUE(r0.ok() && r1.ok());
+    std::vector<Renderer*> renderers{r0->get(), r1->get()};
+    KeyframeBuildStats stats;
+    auto built =
+        buildKeyframeDatabase(model, renderers, test::localizeCamera(), boxPlacement(), RenderSettings{}, {}, &stats);
+    EXPECT_TRUE(built.ok()) << built.error().message;
+    EXPECT_EQ(stats.views, stats.kept + stats.too_close + stats.inside + stats.empty);
+    EXPECT_GT(stats.kept, 0u) << stats.views << " views: " << stats.too_close << " too close, " << stats.inside
+                              << " inside, " << stats.empty << " empty";
+    return built.ok() ? std::make_shared<const KeyframeDatabase>(std::move(built).value()) : nullptr;
+  }();
+  return db;
+}
+
+/// Three boxes of different sizes on the checker ground: unlike the single box, no turn of the
+/// scene maps it onto itself, so a view has one true place.
+Model makeAsymmetricScene() {
+  Model m = test::makeBoxOnGround();
+  for (const auto& [lo, hi] : {std::pair<Eigen::Vector3d, Eigen::Vector3d>{{0.5, 0.4, 0.0}, {0.8, 0.6, 0.7}},
+                               std::pair<Eigen::Vector3d, Eigen::Vector3d>{{-0.9, -0.6, 0.0}, {-0.6, -0.2, 0.2}}}) {
+    const Model box = test::makeBox(lo, hi);
+    const uint32_t base = static_cast<uint32_t>(m.vertexCount());
+    m.positions.insert(m.positions.end(), box.positions.begin(), box.positions.end());
+    m.uvs.insert(m.uvs.end(), box.uvs.begin(), box.uvs.end());
+    for (uint32_t i : box.indices) m.indices.push_back(base + i);
+  }
+  test::finishSingleBlock(m);
+  return m;
+}
+
+/// The asymmetric scene's database and its frames at localizeTruth(i), built once per process.
+const std::shared_ptr<const KeyframeDatabase>& asymmetricDatabase() {
+  static std::shared_ptr<const KeyframeDatabase> db = [] {
+    const Model model = makeAsymmetricScene();
+    auto r0 = CpuRenderer::create(model);
+    auto r1 = CpuRenderer::create(model);
+    EXPECT_TRUE(r0.ok() && r1.ok());
+    std::vector<Renderer*> renderers{r0->get(), r1->get()};
+    auto built = buildKeyframeDatabase(model, renderers, test::localizeCamera(), boxPlacement(), RenderSettings{});
+    EXPECT_TRUE(built.ok()) << built.error().message;
+    return built.ok() ? std::make_shared<const KeyframeDatabase>(std::move(built).value()) : nullptr;
+  }();
+  return db;
+}
+
+const ImageU8& asymmetricFrame(int i) {
+  static std::map<int, ImageU8> frames;
+  auto it = frames.find(i);
+  if (it == frames.end()) {
+    auto view = renderReference(makeAsymmetricScene(), test::localizeCamera(), test::localizeTruth(i));
+    EXPECT_TRUE(view.ok());
+    it = frames.emplace(i, view.ok() ? view->gray : ImageU8(320, 240, 1)).first;
+  }
+  return it->second;
+}
+
+GlobalDescriptor descriptorOf(std::initializer_list<uint64_t> words) {
+  GlobalDescriptor d{};
+  size_t k = 0;
+  for (uint64_t w : words) d[k++] = w;
+  return d;
+}
+
+TEST(KeyframeDatabase, DescriptorIsStableAndSeparatesViews) {
+  const auto& frames = test::localizeFrames(1);
+  const Result<GlobalDescriptor> a = globalDescriptor(frames[0]);
+  ASSERT_TRUE(a.ok()) << a.error().message;
+  EXPECT_EQ(hammingDistance(*a, *globalDescriptor(frames[0])), 0);
+  // A brighter copy (gain and offset) keeps its edges and nearly all bits.
+  ImageU8 brighter = frames[0];
+  for (uint8_t& v : brighter.data) v = static_cast<uint8_t>(std::min(255, 20 + v * 11 / 10));
+  EXPECT_LE(hammingDistance(*a, *globalDescriptor(brighter)), 20);
+  // Another view differs in many bits.
+  const Pose other = test::cameraLookingAt({-1.8, 1.2, 1.0}, {0.0, 0.0, 0.15});
+  auto view = renderReference(test::makeBoxOnGround(), test::localizeCamera(), other);
+  ASSERT_TRUE(view.ok());
+  EXPECT_GT(hammingDistance(*a, *globalDescriptor(view->gray)), 40);
+  // Errors, not crashes.
+  EXPECT_FALSE(globalDescriptor(ImageU8(40, 30, 1)).ok());
+  EXPECT_FALSE(globalDescriptor(ImageU8(320, 240, 3)).ok());
+  EXPECT_EQ(thumbnailContrast(*descriptorThumbnail(ImageU8(320, 240, 1, 0))), 0.0);
+}
+
+TEST(KeyframeDatabase, PlacementPoseLooksAlongHeadingTiltedDown) {
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
+  for (double heading : {0.0, 90.0, 200.0}) {
+    for (double tilt : {-10.0, 0.0, 35.0, 90.0}) {
+      const Pose T = placementPose({1, 2, 3}, up, heading, tilt);
+      EXPECT_TRUE(isValidPose(T));
+      EXPECT_NEAR(T.linear().determinant(), 1.0, 1e-12);
+      const Eigen::Vector3d z = T.linear().col(2), x = T.linear().col(0), y = T.linear().col(1);
+      EXPECT_NEAR(std::asin(-z.dot(up)) * 180.0 / M_PI, tilt, 1e-9);
+      if (tilt < 90.0) {
+        EXPECT_NEAR(x.dot(up), 0.0, 1e-12);  // no roll
+        EXPECT_LT(y.dot(up), 0.0);           // image y points down
+      }
+    }
+  }
+  // Headings 90 degrees apart look 90 degrees apart.
+  const Pose a = placementPose({0, 0, 0}, up, 10.0, 0.0), b = placementPose({0, 0, 0}, up, 100.0, 0.0);
+  EXPECT_NEAR(a.linear().col(2).dot(b.linear().col(2)), 0.0, 1e-12);
+}
+
+TEST(KeyframeDatabase, PlacementIsChecked) {
+  KeyframePlacement p = boxPlacement();
+  EXPECT_TRUE(validateKeyframePlacement(p).ok());
+  KeyframePlacement bad = p;
+  bad.spacing_m = 0;
+  EXPECT_FALSE(validateKeyframePlacement(bad).ok());
+  bad = p;
+  bad.volume.min[0] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_FALSE(validateKeyframePlacement(bad).ok());
+  bad = p;
+  bad.tilts_deg = {120.0};
+  EXPECT_FALSE(validateKeyframePlacement(bad).ok());
+  bad = p;
+  bad.up_world = Eigen::Vector3d::Zero();
+  EXPECT_FALSE(validateKeyframePlacement(bad).ok());
+  bad = p;
+  bad.spacing_m = 1e-3;  // 4400^2 x 400 positions: refused before any work
+  const Status s = validateKeyframePlacement(bad);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("exceed the limit"), std::string::npos) << s.error().message;
+}
+
+TEST(KeyframeDatabase, QueryRanksByHammingDistanceInsideTheRegion) {
+  KeyframeDatabase db(7, test::localizeCamera());
+  const double xs[] = {0.0, 1.0, 2.0, 3.0, 10.0};
+  const uint64_t words[] = {0xFF, 0x0, 0x1, 0xF, 0x0};  // distances to 0: 8, 0, 1, 4, 0
+  for (int k = 0; k < 5; ++k) {
+    DatabaseKeyframe kf;
+    kf.T_world_camera.translation() = Eigen::Vector3d(xs[k], 0, 0);
+    kf.descriptor = descriptorOf({words[k]});
+    db.add(kf);
+  }
+  const GlobalDescriptor q = descriptorOf({0});
+  const std::vector<KeyframeCandidate> all = db.query(q, 10);
+  ASSERT_EQ(all.size(), 5u);
+  const size_t order[] = {1, 4, 2, 3, 0};  // ties by index
+  for (size_t k = 0; k < 5; ++k) EXPECT_EQ(all[k].index, order[k]) << k;
+  EXPECT_EQ(all[0].distance, 0);
+  EXPECT_EQ(all[4].distance, 8);
+  const std::vector<KeyframeCandidate> near = db.query(q, 2, SearchRegion{Eigen::Vector3d(2.5, 0, 0), 1.0});
+  ASSERT_EQ(near.size(), 2u);
+  EXPECT_EQ(near[0].index, 2u);
+  EXPECT_EQ(near[1].index, 3u);
+  EXPECT_TRUE(db.query(q, 0).empty());
+  EXPECT_EQ(db.query(q, 3, SearchRegion{Eigen::Vector3d(0, 0, 0), std::numeric_limits<double>::infinity()}).size(), 3u);
+}
+
+TEST(KeyframeDatabase, BuiltViewsLieInFreeSpaceAndTheirOwnImageIsRetrievedFirst) {
+  const auto& db = boxDatabase();
+  ASSERT_TRUE(db);
+  ASSERT_GT(db->size(), 500u);
+  const Model model = test::makeBoxOnGround();
+  EXPECT_EQ(db->modelFingerprint(), modelFingerprint(model));
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<size_t> pick(0, db->size() - 1);
+  for (int trial = 0; trial < 8; ++trial) {
+    const size_t index = pick(rng);
+    const DatabaseKeyframe& kf = db->keyframes()[index];
+    EXPECT_GT(kf.scene_depth_m, 0.0f);
+    // The query is the view at full resolution (the database rendered it at 160 pixels).
+    auto view = renderReference(model, test::localizeCamera(), kf.T_world_camera);
+    ASSERT_TRUE(view.ok());
+    const GlobalDescriptor d = *globalDescriptor(view->gray);
+    // First, or tied first with views that look the same (the checker scene repeats itself).
+    const std::vector<KeyframeCandidate> top = db->query(d, 20);
+    ASSERT_FALSE(top.empty());
+    EXPECT_EQ(hammingDistance(d, kf.descriptor), top[0].distance) << "trial " << trial;
+    bool found = false;
+    for (const KeyframeCandidate& c : top) found = found || (c.index == index && c.distance == top[0].distance);
+    EXPECT_TRUE(found) << "trial " << trial << ": own keyframe not among the first";
+  }
+}
+
+TEST(KeyframeDatabase, SavedFileLoadsAndDamagedOrForeignFilesAreRefused) {
+  const auto& db = boxDatabase();
+  ASSERT_TRUE(db);
+  const std::string path = tempPath("db.kdb");
+  ASSERT_TRUE(db->save(path).ok());
+  EXPECT_EQ(std::filesystem::file_size(path), 72 + KeyframeDatabase::kRecordBytes * db->size() + 8);
+  const Result<KeyframeDatabase> loaded = KeyframeDatabase::load(path, db->modelFingerprint());
+  ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+  ASSERT_EQ(loaded->size(), db->size());
+  EXPECT_EQ(loaded->camera().fx, db->camera().fx);
+  for (size_t k = 0; k < db->size(); ++k) {
+    EXPECT_EQ(loaded->keyframes()[k].descriptor, db->keyframes()[k].descriptor);
+    EXPECT_LT((loaded->keyframes()[k].T_world_camera.matrix() - db->keyframes()[k].T_world_camera.matrix()).norm(),
+              1e-6);
+  }
+  const std::string bytes = *text::readFile(path, "test");
+  auto write = [&](const std::string& name, const std::string& content) {
+    const std::string p = tempPath(name);
+    std::ofstream(p, std::ios::binary) << content;
+    return p;
+  };
+  auto refused = [&](const std::string& p, std::optional<uint64_t> fingerprint, ErrorCode code, const char* words) {
+    const Result<KeyframeDatabase> r = KeyframeDatabase::load(p, fingerprint);
+    ASSERT_FALSE(r.ok()) << p;
+    EXPECT_EQ(r.error().code, code) << r.error().message;
+    EXPECT_NE(r.error().message.find(words), std::string::npos) << r.error().message;
+    EXPECT_NE(r.error().message.find(p), std::string::npos) << r.error().message;
+    EXPECT_EQ(r.error().message.find('\n'), std::string::npos);
+    std::filesystem::remove(p);
+  };
+  refused(write("truncated", bytes.substr(0, bytes.size() - 100)), std::nullopt, ErrorCode::kMalformedInput,
+          "truncated");
+  std::string flipped = bytes;
+  flipped[200] = static_cast<char>(flipped[200] ^ 0x10);
+  refused(write("flipped", flipped), std::nullopt, ErrorCode::kMalformedInput, "checksum");
+  refused(write("other", "hello, world: not a database at all, but long enough to have a header......."), std::nullopt,
+          ErrorCode::kMalformedInput, "not a vkloc keyframe database");
+  std::string version = bytes;
+  version[8] = 9;
+  refused(write("version", version), std::nullopt, ErrorCode::kUnsupported, "version 9");
+  refused(path, db->modelFingerprint() ^ 1, ErrorCode::kInvalidArgument, "another model");
+  EXPECT_EQ(KeyframeDatabase::load(tempPath("missing")).error().code, ErrorCode::kNotFound);
+}
+
+std::unique_ptr<Localizer> relocalizer(KeyframeThreading threading) {
+  LocalizerOptions options;
+  options.keyframe_threading = threading;
+  auto created = Localizer::create(makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
+  EXPECT_TRUE(created.ok()) << created.error().message;
+  if (!created.ok()) return nullptr;
+  EXPECT_TRUE((*created)->setKeyframeDatabase(asymmetricDatabase()).ok());
+  return std::move(created).value();
+}
+
+TEST(Relocalization, GlobalInitializationFindsTheFirstPoseAndTracksOn) {
+  for (KeyframeThreading threading : {KeyframeThreading::kSynchronous, KeyframeThreading::kWorkerThread}) {
+    auto localizer = relocalizer(threading);
+    ASSERT_TRUE(localizer);
+    // A GPS-like prior 0.4 m off, searched within 1.2 m.
+    const Eigen::Vector3d prior = test::localizeTruth(0).translation() + Eigen::Vector3d(0.3, -0.2, 0.2);
+    ASSERT_TRUE(localizer->startSearch(SearchRegion{prior, 1.2}).ok());
+    for (int i = 0; i < 6; ++i) {
+      const Result<LocalizationResult> r = localizer->localize(i * 50'000'000, asymmetricFrame(i));
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      if (i == 0) {
+        ASSERT_EQ(r->state, TrackingState::kRelocalized) << "score " << r->verify_score;
+        EXPECT_GT(r->relocalization_candidates, 0);
+        EXPECT_GE(r->verify_score, LocalizerOptions{}.relocalization.min_score);
+      } else {
+        EXPECT_EQ(r->state, TrackingState::kTracking) << i;
+      }
+      EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i)), 5e-3) << i;
+      EXPECT_LT(test::rotationErrorDeg(r->T_world_camera, test::localizeTruth(i)), 0.3) << i;
+    }
+  }
+}
+
+TEST(Relocalization, RecoversAfterBlackFramesAndAJumpWithoutSearchingBlackOnes) {
+  auto localizer = relocalizer(KeyframeThreading::kSynchronous);
+  ASSERT_TRUE(localizer);
+  localizer->reset(test::localizeTruth(0));
+  int64_t t = 0;
+  auto step = [&](const ImageU8& image) {
+    t += 50'000'000;
+    Result<LocalizationResult> r = localizer->localize(t, image);
+    EXPECT_TRUE(r.ok()) << r.error().message;
+    return r.ok() ? *r : LocalizationResult{};
+  };
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(step(asymmetricFrame(i)).state, TrackingState::kTracking);
+  const ImageU8 black(320, 240, 1, 0);
+  for (int i = 0; i < 5; ++i) {
+    const LocalizationResult r = step(black);
+    EXPECT_EQ(r.state, TrackingState::kLost);
+    EXPECT_EQ(r.relocalization_candidates, 0) << "a black frame has nothing to search for";
+  }
+  // The camera resumes 10 degrees further round the boxes (0.35 m away): trusted again within
+  // three frames, nothing wrong accepted meanwhile (after a loss a pose must be verified).
+  int recovered_at = -1;
+  for (int k = 0; k < 6; ++k) {
+    const int i = 20 + k;
+    const LocalizationResult r = step(asymmetricFrame(i));
+    const bool trusted = r.state == TrackingState::kTracking || r.state == TrackingState::kRelocalized;
+    if (trusted) {
+      EXPECT_LT(test::translationError(r.T_world_camera, test::localizeTruth(i)), 5e-3) << i;
+      if (recovered_at < 0) recovered_at = k;
+    }
+  }
+  EXPECT_GE(recovered_at, 0);
+  EXPECT_LT(recovered_at, 3);
+}
+
+TEST(Relocalization, SearchesFindViewsAllRoundTheScene) {
+  auto localizer = relocalizer(KeyframeThreading::kSynchronous);
+  ASSERT_TRUE(localizer);
+  int found = 0;
+  for (int i : {0, 90, 180, 270, 360, 450, 540, 630}) {
+    // STAR's protocol: a search window around the true position.
+    ASSERT_TRUE(localizer->startSearch(SearchRegion{test::localizeTruth(i).translation(), 1.0}).ok());
+    const Result<LocalizationResult> r = localizer->localize(1, asymmetricFrame(i));
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    if (r->state == TrackingState::kInitializing) continue;
+    ASSERT_EQ(r->state, TrackingState::kRelocalized);
+    // The pose goal of the bench: 2 % of the ~2 m scene depth.
+    EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i)), 0.04) << i;
+    ++found;
+  }
+  EXPECT_GE(found, 6) << "of 8";
+}
+
+TEST(Relocalization, DatabaseAndSearchErrors) {
+  auto localizer = relocalizer(KeyframeThreading::kSynchronous);
+  ASSERT_TRUE(localizer);
+  // Another model: refused.
+  auto other = std::make_shared<KeyframeDatabase>(asymmetricDatabase()->modelFingerprint() ^ 1, test::localizeCamera());
+  EXPECT_FALSE(localizer->setKeyframeDatabase(other).ok());
+  // Another field of view: refused.
+  PinholeCamera wide = test::localizeCamera();
+  wide.fx = wide.fy = 150.0;
+  EXPECT_FALSE(
+      localizer->setKeyframeDatabase(std::make_shared<KeyframeDatabase>(asymmetricDatabase()->modelFingerprint(), wide))
+          .ok());
+  // The same field of view at another resolution is fine.
+  PinholeCamera twice = test::localizeCamera();
+  twice.fx *= 2;
+  twice.fy *= 2;
+  twice.width *= 2;
+  twice.height *= 2;
+  EXPECT_TRUE(
+      localizer
+          ->setKeyframeDatabase(std::make_shared<KeyframeDatabase>(asymmetricDatabase()->modelFingerprint(), twice))
+          .ok());
+  EXPECT_FALSE(localizer->startSearch(SearchRegion{Eigen::Vector3d(NAN, 0, 0), 1.0}).ok());
+  ASSERT_TRUE(localizer->setKeyframeDatabase(nullptr).ok());
+  EXPECT_FALSE(localizer->startSearch(std::nullopt).ok());
+  LocalizerOptions bad;
+  bad.relocalization.candidates = 0;
+  EXPECT_FALSE(Localizer::create(makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
+  bad = LocalizerOptions{};
+  bad.relocalization.min_radius_m = NAN;
+  EXPECT_FALSE(Localizer::create(makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
+}
+
+}  // namespace
+}  // namespace vkloc

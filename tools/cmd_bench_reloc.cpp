@@ -1,0 +1,307 @@
+// vkloc bench reloc: relocalization on STAR's protocol (seed 001 sec. III-E): query frames spread
+// over a sequence with ground truth, each searched in the keyframe database within a window
+// around its true position. Reports retrieval (the top keyframe's distance to the query), recovery
+// (a pose relocalized, verified and within the error goal; wrong poses accepted are counted
+// apart), and the query and recovery times. Optionally forced-loss trials: tracking with the IMU,
+// the images blacked out for a while or the camera made to jump, and the frames it takes to
+// relocalize after the first usable image.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "common.hpp"
+#include "vkloc/core/atomic_file.hpp"
+#include "vkloc/core/clock.hpp"
+#include "vkloc/core/random.hpp"
+#include "vkloc/core/se3.hpp"
+#include "vkloc/engine/gpu_accelerator.hpp"
+#include "vkloc/io/image_io.hpp"
+#include "vkloc/io/sequence.hpp"
+#include "vkloc/localize/keyframe_database.hpp"
+#include "vkloc/localize/localizer.hpp"
+
+namespace vkloc::cli {
+namespace {
+
+struct RelocBenchArgs {
+  std::string sequence;
+  std::string db;
+  int queries = 100;
+  double window_m = 2.0;        ///< Search window around the query's true position (STAR: 2 m).
+  double goal_fraction = 0.02;  ///< Recovered: translation error <= this x scene depth ...
+  double goal_deg = 2.0;        ///< ... and rotation error <= this.
+  double retrieval_m = 1.0;     ///< Retrieval success: top keyframe within this ...
+  double retrieval_deg = 30.0;  ///< ... and this of the query.
+  int candidates = RelocalizationOptions{}.candidates;
+  std::string keyframes = "sync";
+  int trials = 0;              ///< Forced-loss trials (0: none).
+  std::string loss = "black";  ///< black | jump.
+  double black_s = 1.0;        ///< Seconds of black frames.
+  double jump_m = 5.0;         ///< Jump of the camera, metres.
+  uint64_t seed = 1;
+  bool no_vulkan = false;
+  DeviceArgs device;
+  std::string csv;
+};
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::floor(q * static_cast<double>(v.size() - 1) + 0.5)));
+  return v[k];
+}
+
+struct Setup {
+  Sequence seq;
+  PinholeCamera camera;
+  Model model;
+  std::shared_ptr<const KeyframeDatabase> db;
+  std::shared_ptr<Accelerator> accelerator;
+  std::shared_ptr<GpuContext> context;
+};
+
+std::unique_ptr<Localizer> makeLocalizer(const Setup& s, const RelocBenchArgs& a, bool imu) {
+  LocalizerOptions options;
+  LocalizerArgs localizer_args;
+  localizer_args.keyframes = a.keyframes;
+  localizer_args.filter = "ekf";
+  localizer_args.apply(options);
+  setSequenceInertial(s.seq, imu, options);
+  options.relocalization.candidates = a.candidates;
+  auto localizer = take(Localizer::create(s.model, s.camera, options, s.accelerator));
+  check(localizer->setKeyframeDatabase(s.db));
+  return localizer;
+}
+
+void runRelocBench(const RelocBenchArgs& a) {
+  Setup s;
+  s.seq = take(loadSequence(a.sequence));
+  if (s.seq.groundtruth.empty()) throw Failure{fmt::format("{}: no ground truth (groundtruth.txt)", a.sequence)};
+  s.camera = sequenceCamera(s.seq);
+  s.model = loadSequenceModel(s.seq);
+  s.db = std::make_shared<const KeyframeDatabase>(take(KeyframeDatabase::load(a.db, modelFingerprint(s.model))));
+  if (s.db->size() == 0) throw Failure{fmt::format("{}: the database holds no keyframe", a.db)};
+  if (!a.no_vulkan) {
+    s.context = a.device.create();
+    s.accelerator = take(makeGpuAccelerator(s.context));
+  }
+
+  // Query time over the whole database: the median of repeated full scans, per 1000 keyframes.
+  {
+    const ImageU8 gray = take(readImageU8(s.seq.imagePath(0), 1));
+    const GlobalDescriptor d = take(globalDescriptor(gray));
+    std::vector<double> us;
+    for (int r = 0; r < 200; ++r) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const std::vector<KeyframeCandidate> c = s.db->query(d, static_cast<size_t>(a.candidates));
+      us.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+      if (c.empty()) throw Failure{"query returned nothing"};
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int r = 0; r < 50; ++r) (void)globalDescriptor(gray);
+    const double descriptor_ms = msSince(t0) / 50.0;
+    const double median_us = percentile(us, 0.5);
+    std::printf("query: %zu keyframes in %.1f us (%.4f ms per 1000 keyframes), descriptor of a %dx%d image %.3f ms\n",
+                s.db->size(), median_us, median_us * 1e-3 * 1000.0 / static_cast<double>(s.db->size()), s.camera.width,
+                s.camera.height, descriptor_ms);
+  }
+
+  // STAR's protocol: queries spread over the frames with ground truth.
+  std::vector<size_t> frames;
+  for (size_t i = 0; i < s.seq.images.size(); ++i) {
+    if (groundTruthAt(s.seq.groundtruth, s.seq.images[i].t_ns)) frames.push_back(i);
+  }
+  std::vector<size_t> queries;
+  const size_t n = std::min(frames.size(), static_cast<size_t>(a.queries));
+  for (size_t q = 0; q < n; ++q) queries.push_back(frames[q * frames.size() / n]);
+  auto localizer = makeLocalizer(s, a, false);
+  std::unique_ptr<PartialFileWriter> csv;
+  if (!a.csv.empty()) {
+    csv = take(PartialFileWriter::open(a.csv));
+    check(csv->appendLine(
+        "frame,top_distance_bits,top_m,top_deg,state,t_err_m,r_err_deg,depth_m,verify_score,candidates,ms"));
+  }
+  size_t retrieved = 0, recovered = 0, wrong = 0, in_window = 0;
+  std::vector<double> top_m, top_deg, recover_ms;
+  const auto t_start = std::chrono::steady_clock::now();
+  for (size_t q = 0; q < queries.size(); ++q) {
+    const size_t i = queries[q];
+    const Pose truth = *groundTruthAt(s.seq.groundtruth, s.seq.images[i].t_ns);
+    const ImageU8 gray = take(readImageU8(s.seq.imagePath(i), 1));
+    SearchRegion region;
+    region.center_world = truth.translation();
+    region.radius_m = a.window_m;
+    const GlobalDescriptor d = take(globalDescriptor(gray));
+    const std::vector<KeyframeCandidate> top = s.db->query(d, 1, region);
+    double dm = NAN, ddeg = NAN;
+    int bits = -1;
+    if (!top.empty()) {
+      ++in_window;
+      const Pose& T = s.db->keyframes()[top[0].index].T_world_camera;
+      dm = (T.translation() - truth.translation()).norm();
+      ddeg = rotationAngleDeg(T.linear().transpose() * truth.linear());
+      bits = top[0].distance;
+      top_m.push_back(dm);
+      top_deg.push_back(ddeg);
+      retrieved += dm <= a.retrieval_m && ddeg <= a.retrieval_deg;
+    }
+    check(localizer->startSearch(region));
+    const LocalizationResult r = take(localizer->localize(s.seq.images[i].t_ns, gray));
+    const double t_err = (r.T_world_camera.translation() - truth.translation()).norm();
+    const double r_err = rotationAngleDeg(r.T_world_camera.linear().transpose() * truth.linear());
+    const bool relocalized = r.state == TrackingState::kRelocalized;
+    const double depth = r.scene_depth_m > 0 ? r.scene_depth_m : 1.0;
+    const bool good = relocalized && t_err <= a.goal_fraction * depth && r_err <= a.goal_deg;
+    recovered += good;
+    wrong += relocalized && !good;
+    recover_ms.push_back(r.total_ms);
+    if (csv) {
+      check(
+          csv->appendLine(fmt::format("{},{},{:.4f},{:.3f},{},{:.5f},{:.4f},{:.3f},{:.4f},{},{:.1f}", i, bits, dm, ddeg,
+                                      trackingStateName(r.state), relocalized ? t_err : NAN, relocalized ? r_err : NAN,
+                                      r.scene_depth_m, r.verify_score, r.relocalization_candidates, r.total_ms)));
+    }
+    if ((q + 1) % 10 == 0 || q + 1 == queries.size()) {
+      std::fprintf(stderr, "bench reloc: %zu/%zu queries, %zu recovered, %.0f s\n", q + 1, queries.size(), recovered,
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count());
+    }
+  }
+  if (csv) check(csv->commit());
+  const double nq = static_cast<double>(queries.size());
+  std::printf(
+      "%s: %zu queries, window %.1f m: retrieval (top keyframe within %.1f m and %.0f deg) %.1f %% "
+      "(median %.2f m, %.1f deg; %zu with no keyframe in the window)\n",
+      s.seq.name.c_str(), queries.size(), a.window_m, a.retrieval_m, a.retrieval_deg, 100.0 * retrieved / nq,
+      percentile(top_m, 0.5), percentile(top_deg, 0.5), queries.size() - in_window);
+  std::printf(
+      "%s: recovered (verified, within %.1f %% of depth and %.1f deg) %.1f %%, wrong poses accepted %zu; recovery "
+      "time median %.0f ms, p90 %.0f ms (%d candidates)\n",
+      s.seq.name.c_str(), 100 * a.goal_fraction, a.goal_deg, 100.0 * recovered / nq, wrong, percentile(recover_ms, 0.5),
+      percentile(recover_ms, 0.9), a.candidates);
+
+  if (a.trials <= 0) return;
+  // Forced loss: track from a seeded start frame with the IMU; after 1 s the images go black for
+  // black_s (or, for a jump, the frames skip ahead to where the camera is jump_m away); count
+  // the frames from the first usable image to a verified pose again.
+  const int64_t frame_ns = s.seq.images.size() > 1 ? s.seq.images[1].t_ns - s.seq.images[0].t_ns : 50'000'000;
+  const size_t lead = static_cast<size_t>(std::llround(1e9 / static_cast<double>(frame_ns)));
+  const size_t black = static_cast<size_t>(std::llround(a.black_s * 1e9 / static_cast<double>(frame_ns)));
+  Xoshiro256 rng(a.seed);
+  size_t ok = 0, wrong_trials = 0, skipped = 0;
+  std::vector<double> frames_to_recover;
+  for (int trial = 0; trial < a.trials; ++trial) {
+    auto tracker = makeLocalizer(s, a, true);
+    const size_t span = lead + black + 6;
+    if (s.seq.images.size() <= span + 1) throw Failure{"the sequence is too short for forced-loss trials"};
+    size_t start = static_cast<size_t>(rng.uniform(0.0, static_cast<double>(s.seq.images.size() - span - 1)));
+    // A jump: the frames after the loss come from where the camera is jump_m from the last one.
+    size_t resume = start + lead + (a.loss == "black" ? black : 1);
+    if (a.loss == "jump") {
+      const Pose at_loss = *groundTruthAt(s.seq.groundtruth, s.seq.images[start + lead].t_ns);
+      size_t k = resume;
+      while (k + 6 < s.seq.images.size()) {
+        const std::optional<Pose> p = groundTruthAt(s.seq.groundtruth, s.seq.images[k].t_ns);
+        if (p && (p->translation() - at_loss.translation()).norm() >= a.jump_m) break;
+        ++k;
+      }
+      if (k + 6 >= s.seq.images.size()) {
+        ++skipped;
+        continue;
+      }
+      resume = k;
+    }
+    const std::optional<Pose> T0 = groundTruthAt(s.seq.groundtruth, s.seq.images[start].t_ns);
+    tracker->reset(*T0);
+    size_t next_imu = 0;
+    int recovered_after = -1;
+    bool accepted_wrong = false;
+    // Frame times run on without a gap (a jump is a jump in space, not in time).
+    for (size_t f = 0; f < lead + black + 6; ++f) {
+      size_t i = start + f;
+      bool blacked = false;
+      if (f >= lead) {
+        if (a.loss == "black" && f < lead + black) {
+          blacked = true;
+        } else {
+          i = resume + (f - lead - (a.loss == "black" ? black : 0));
+        }
+      }
+      if (i >= s.seq.images.size()) break;
+      const int64_t t_ns = s.seq.images[start].t_ns + static_cast<int64_t>(f) * frame_ns;
+      if (a.loss == "black") next_imu = feedSequenceImu(s.seq, next_imu, t_ns, *tracker);
+      ImageU8 gray = take(readImageU8(s.seq.imagePath(i), 1));
+      if (blacked) std::fill(gray.data.begin(), gray.data.end(), uint8_t{0});
+      const LocalizationResult r = take(tracker->localize(t_ns, gray));
+      if (f < lead + (a.loss == "black" ? black : 0) || blacked) continue;
+      const std::optional<Pose> truth = groundTruthAt(s.seq.groundtruth, s.seq.images[i].t_ns);
+      const bool trusted = r.state == TrackingState::kTracking || r.state == TrackingState::kRelocalized;
+      if (!trusted || !truth) continue;
+      const double t_err = (r.T_world_camera.translation() - truth->translation()).norm();
+      const double r_err = rotationAngleDeg(r.T_world_camera.linear().transpose() * truth->linear());
+      const double depth = r.scene_depth_m > 0 ? r.scene_depth_m : 1.0;
+      if (t_err <= a.goal_fraction * depth && r_err <= a.goal_deg) {
+        if (recovered_after < 0) recovered_after = static_cast<int>(f - lead - (a.loss == "black" ? black : 0));
+      } else {
+        accepted_wrong = true;
+      }
+    }
+    if (recovered_after >= 0 && recovered_after < 3 && !accepted_wrong) ++ok;
+    wrong_trials += accepted_wrong;
+    frames_to_recover.push_back(recovered_after < 0 ? INFINITY : recovered_after + 1);
+    std::fprintf(stderr, "bench reloc: trial %d/%d: start frame %zu, verified again at usable frame %d%s\n", trial + 1,
+                 a.trials, start, recovered_after < 0 ? -1 : recovered_after + 1, accepted_wrong ? ", WRONG pose" : "");
+  }
+  const size_t done = frames_to_recover.size();
+  std::printf(
+      "%s: forced loss (%s): verified again within 3 frames of the first usable image in %zu of %zu trials (%.1f %%), "
+      "trials with a wrong pose accepted %zu, median frames to recover %.0f%s\n",
+      s.seq.name.c_str(),
+      a.loss == "black" ? fmt::format("{:.1f} s of black frames", a.black_s).c_str()
+                        : fmt::format("jump of {:.1f} m", a.jump_m).c_str(),
+      ok, done, done > 0 ? 100.0 * static_cast<double>(ok) / static_cast<double>(done) : 0.0, wrong_trials,
+      percentile(frames_to_recover, 0.5),
+      skipped > 0 ? fmt::format(" ({} trials skipped: no such jump)", skipped).c_str() : "");
+}
+
+}  // namespace
+
+void addRelocBench(CLI::App& bench) {
+  auto args = std::make_shared<RelocBenchArgs>();
+  CLI::App* reloc = bench.add_subcommand(
+      "reloc", "Relocalization from a keyframe database on STAR's protocol, and forced-loss trials");
+  reloc->add_option("--sequence", args->sequence, "Sequence folder with ground truth")->required();
+  reloc->add_option("--db", args->db, "Keyframe database (vkloc keyframes build)")->required();
+  reloc->add_option("--queries", args->queries, "Query frames, spread over the sequence")
+      ->check(CLI::Range(1, 100000))
+      ->capture_default_str();
+  reloc->add_option("--window", args->window_m, "Search window around the query's true position, metres")
+      ->check(CLI::Range(0.0, 1e7))
+      ->capture_default_str();
+  reloc->add_option("--candidates", args->candidates, "Keyframes aligned per search")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  reloc->add_option("--keyframes", args->keyframes, "Keyframe threading: sync | worker")->capture_default_str();
+  reloc->add_option("--trials", args->trials, "Forced-loss trials (0: none)")
+      ->check(CLI::Range(0, 10000))
+      ->capture_default_str();
+  reloc->add_option("--loss", args->loss, "Forced loss: black (frames) | jump (of the camera)")
+      ->check(CLI::IsMember({"black", "jump"}))
+      ->capture_default_str();
+  reloc->add_option("--black", args->black_s, "Seconds of black frames")
+      ->check(CLI::Range(0.0, 1e3))
+      ->capture_default_str();
+  reloc->add_option("--jump", args->jump_m, "Jump of the camera, metres")
+      ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  reloc->add_option("--seed", args->seed, "Seed of the trials' start frames")->capture_default_str();
+  reloc->add_flag("--no-vulkan", args->no_vulkan, "Render keyframes with the CPU reference rasterizer");
+  args->device.add(*reloc);
+  reloc->add_option("--csv", args->csv, "Write one row per query");
+  reloc->callback([args] { runRelocBench(*args); });
+}
+
+}  // namespace vkloc::cli

@@ -1,0 +1,238 @@
+// vkloc keyframes: build and inspect the keyframe database of relocalization and global
+// initialization (localize/keyframe_database.hpp).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <set>
+#include <thread>
+
+#include "common.hpp"
+#include "vkloc/core/clock.hpp"
+#include "vkloc/engine/gpu_accelerator.hpp"
+#include "vkloc/io/sequence.hpp"
+#include "vkloc/localize/keyframe_database.hpp"
+#include "vkloc/localize/localizer.hpp"
+#include "vkloc/render/cpu_renderer.hpp"
+
+namespace vkloc::cli {
+namespace {
+
+struct BuildArgs {
+  std::string sequence;
+  ModelArgs model;
+  CameraArgs camera;
+  std::string out;
+  std::string volume;  ///< "x0,y0,z0,x1,y1,z1", metres; default: the ground truth's box + margin.
+  double margin_m = 1.0;
+  double spacing_m = 1.0;
+  int headings = 12;
+  std::string tilts;  ///< Degrees below the horizon, comma-separated; default: the ground truth's.
+  double tilt_step_deg = 15.0;
+  std::string up;  ///< "x,y,z"; default: against the sequence's gravity, else +z.
+  double clearance_m = KeyframePlacement{}.min_clearance_m;
+  std::string renderer = "auto";
+  int threads = 0;  ///< CPU renderers (0: one per core).
+  DeviceArgs device;
+  bool quiet = false;
+};
+
+/// Tilt of a camera's optical axis below the horizon, degrees.
+double tiltBelowHorizonDeg(const Pose& T_world_camera, const Eigen::Vector3d& up) {
+  const Eigen::Vector3d z = T_world_camera.linear().col(2);
+  return std::asin(std::clamp(-z.dot(up.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+void runBuild(const BuildArgs& a) {
+  PinholeCamera camera;
+  Model model;
+  std::optional<Sequence> seq;
+  if (!a.sequence.empty()) {
+    seq = take(loadSequence(a.sequence));
+    camera = sequenceCamera(*seq);
+    model = loadSequenceModel(*seq);
+  } else {
+    camera = a.camera.get();
+    model = a.model.load();
+  }
+  KeyframePlacement placement;
+  placement.spacing_m = a.spacing_m;
+  placement.headings = a.headings;
+  placement.min_clearance_m = a.clearance_m;
+  if (!a.up.empty()) {
+    const std::vector<double> v = take(parseNumbers(a.up, "--up (x,y,z)", 3));
+    placement.up_world = Eigen::Vector3d(v[0], v[1], v[2]);
+  } else if (seq) {
+    placement.up_world = -seq->gravity_world;
+  }
+  if (!(placement.up_world.norm() > 0)) throw Failure{"--up: need a non-zero vector"};
+  placement.up_world.normalize();
+  if (!a.volume.empty()) {
+    const std::vector<double> v = take(parseNumbers(a.volume, "--volume (x0,y0,z0,x1,y1,z1)", 6));
+    for (int k = 0; k < 3; ++k) {
+      placement.volume.min[k] = static_cast<float>(std::min(v[k], v[k + 3]));
+      placement.volume.max[k] = static_cast<float>(std::max(v[k], v[k + 3]));
+    }
+  } else if (seq && !seq->groundtruth.empty()) {
+    // The navigable volume: where the sequence's camera went, with a margin.
+    for (const StampedPose& p : seq->groundtruth) {
+      const Eigen::Vector3f t = p.T_world_camera.translation().cast<float>();
+      placement.volume.extend(t.data());
+    }
+    for (int k = 0; k < 3; ++k) {
+      placement.volume.min[k] -= static_cast<float>(a.margin_m);
+      placement.volume.max[k] += static_cast<float>(a.margin_m);
+    }
+  } else {
+    throw Failure{"--volume is needed without a --sequence with ground truth"};
+  }
+  if (!a.tilts.empty()) {
+    placement.tilts_deg = take(parseNumbers(a.tilts, "--tilts (degrees below the horizon)", 0));
+  } else if (seq && !seq->groundtruth.empty()) {
+    // The tilts the platform uses: those of the ground truth, on a grid of tilt_step_deg.
+    std::set<long> steps;
+    for (const StampedPose& p : seq->groundtruth) {
+      steps.insert(std::lround(tiltBelowHorizonDeg(p.T_world_camera, placement.up_world) / a.tilt_step_deg));
+    }
+    placement.tilts_deg.clear();
+    for (long s : steps) placement.tilts_deg.push_back(static_cast<double>(s) * a.tilt_step_deg);
+  }
+  check(validateKeyframePlacement(placement));
+
+  // One Vulkan renderer (the device is parallel itself), or one CPU renderer per core.
+  std::vector<std::unique_ptr<Renderer>> renderers;
+  std::shared_ptr<GpuContext> context;
+  if (a.renderer == "vulkan" || a.renderer == "auto") {
+    context = a.device.create();
+    std::shared_ptr<Accelerator> accelerator = take(makeGpuAccelerator(context));
+    if (a.renderer == "vulkan" || !accelerator->isCpuDriver()) {
+      renderers.push_back(take(accelerator->createRenderer(model)));
+    }
+  } else if (a.renderer != "cpu") {
+    throw Failure{fmt::format("--renderer '{}': expected auto, cpu or vulkan", a.renderer)};
+  }
+  if (renderers.empty()) {
+    const int threads = a.threads > 0 ? a.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+    for (int t = 0; t < threads; ++t) renderers.push_back(take(CpuRenderer::create(model)));
+  }
+  std::vector<Renderer*> pointers;
+  for (const auto& r : renderers) pointers.push_back(r.get());
+  const Renderer* renderer = renderers.front().get();
+  std::string tilts;
+  for (double t : placement.tilts_deg) tilts += fmt::format("{}{:g}", tilts.empty() ? "" : ",", t);
+  if (!a.quiet) {
+    std::printf("volume [%.1f %.1f %.1f] .. [%.1f %.1f %.1f] m, spacing %.2f m, %d headings, tilts %s deg; %zu x %s\n",
+                placement.volume.min[0], placement.volume.min[1], placement.volume.min[2], placement.volume.max[0],
+                placement.volume.max[1], placement.volume.max[2], placement.spacing_m, placement.headings,
+                tilts.c_str(), renderers.size(), renderer->describe().c_str());
+    std::fflush(stdout);
+  }
+  const auto t0 = SteadyClock::now();
+  double last_print_ms = 0;
+  auto progress = [&](size_t done, size_t total) {
+    const double ms = msSince(t0);
+    if (a.quiet || (ms - last_print_ms < 2000 && done != total)) return;
+    last_print_ms = ms;
+    const double eta_s = done > 0 ? ms * 1e-3 * static_cast<double>(total - done) / static_cast<double>(done) : 0.0;
+    std::fprintf(stderr, "keyframes: %zu/%zu views, %.0f s, %.0f s left\n", done, total, ms * 1e-3, eta_s);
+  };
+  KeyframeBuildStats stats;
+  RenderSettings render;
+  const KeyframeDatabase db = take(buildKeyframeDatabase(model, pointers, camera, placement, render, progress, &stats));
+  if (db.size() == 0) throw Failure{"no view of the placement lies in free space and sees the model; nothing written"};
+  check(db.save(a.out));
+  const uint64_t bytes = std::filesystem::file_size(a.out);
+  std::printf(
+      "keyframes: %zu of %zu views kept (%zu positions; left out: %zu too close, %zu inside geometry, %zu empty) in "
+      "%.1f s (%.2f ms per view); %s: %.1f KiB, %.1f bytes per keyframe\n",
+      stats.kept, stats.views, stats.positions, stats.too_close, stats.inside, stats.empty, stats.seconds,
+      stats.views > 0 ? 1e3 * stats.seconds / static_cast<double>(stats.views) : 0.0, a.out.c_str(),
+      static_cast<double>(bytes) / 1024.0, static_cast<double>(bytes) / static_cast<double>(db.size()));
+}
+
+struct InfoArgs {
+  std::string db;
+  std::string sequence;
+};
+
+void runInfo(const InfoArgs& a) {
+  std::optional<uint64_t> fingerprint;
+  if (!a.sequence.empty()) fingerprint = modelFingerprint(loadSequenceModel(take(loadSequence(a.sequence))));
+  const KeyframeDatabase db = take(KeyframeDatabase::load(a.db, fingerprint));
+  Aabb box;
+  for (const DatabaseKeyframe& k : db.keyframes()) {
+    const Eigen::Vector3f t = k.T_world_camera.translation().cast<float>();
+    box.extend(t.data());
+  }
+  const PinholeCamera& c = db.camera();
+  std::printf("%s: version %u, %zu keyframes, model fingerprint %016llx%s, camera %dx%d fx %.2f fy %.2f\n",
+              a.db.c_str(), KeyframeDatabase::kVersion, db.size(),
+              static_cast<unsigned long long>(db.modelFingerprint()),
+              fingerprint ? " (matches the sequence's model)" : "", c.width, c.height, c.fx, c.fy);
+  if (db.size() > 0) {
+    std::printf("positions [%.2f %.2f %.2f] .. [%.2f %.2f %.2f] m\n", box.min[0], box.min[1], box.min[2], box.max[0],
+                box.max[1], box.max[2]);
+  }
+}
+
+void addKeyframesVerb(CLI::App& app) {
+  CLI::App* cmd = app.add_subcommand("keyframes", "Keyframe database for relocalization: build, info");
+  cmd->require_subcommand(1);
+  {
+    auto args = std::make_shared<BuildArgs>();
+    CLI::App* build = cmd->add_subcommand(
+        "build", "Render virtual cameras on a grid in the model's free space and store one ORB descriptor each");
+    build->add_option("--sequence,-s", args->sequence,
+                      "Sequence: its model, camera, gravity, and its ground truth's box and tilts as defaults");
+    args->model.add(*build);
+    args->camera.add(*build);
+    build->add_option("--out,-o", args->out, "Database file to write")->required();
+    build->add_option("--volume", args->volume, "Box of positions 'x0,y0,z0,x1,y1,z1', metres (world frame)");
+    build->add_option("--margin", args->margin_m, "Margin around the ground truth's box, metres")
+        ->check(CLI::Range(0.0, 1e5))
+        ->capture_default_str();
+    build->add_option("--spacing", args->spacing_m, "Grid spacing, metres")
+        ->check(CLI::Range(1e-3, 1e6))
+        ->capture_default_str();
+    build->add_option("--headings", args->headings, "Headings per position")
+        ->check(CLI::Range(1, 360))
+        ->capture_default_str();
+    build->add_option("--tilts", args->tilts,
+                      "Tilts below the horizon, degrees, e.g. '0,20' (default: the ground truth's)");
+    build->add_option("--tilt-step", args->tilt_step_deg, "Grid of the ground truth's tilts, degrees")
+        ->check(CLI::Range(1.0, 90.0))
+        ->capture_default_str();
+    build->add_option("--up", args->up, "Up direction 'x,y,z' (default: against the sequence's gravity, else +z)");
+    build->add_option("--clearance", args->clearance_m, "Leave out views with a surface nearer than this, metres")
+        ->check(CLI::Range(0.0, 1e6))
+        ->capture_default_str();
+    build->add_option("--renderer", args->renderer, "auto (Vulkan on a GPU, else CPU) | cpu | vulkan")
+        ->capture_default_str();
+    build->add_option("--threads", args->threads, "CPU renderers in parallel (0: one per core)")
+        ->check(CLI::Range(0, 256))
+        ->capture_default_str();
+    args->device.add(*build);
+    build->add_flag("--quiet,-q", args->quiet, "Print only the final line");
+    build->callback([args] {
+      if (args->sequence.empty() && args->model.model.empty()) throw Failure{"give --sequence or --model"};
+      runBuild(*args);
+    });
+  }
+  {
+    auto args = std::make_shared<InfoArgs>();
+    CLI::App* info =
+        cmd->add_subcommand("info", "Describe a keyframe database (and check it against a sequence's model)");
+    info->add_option("database", args->db, "Database file")->required();
+    info->add_option("--sequence,-s", args->sequence, "Check that the database was built for this sequence's model");
+    info->callback([args] { runInfo(*args); });
+  }
+}
+
+}  // namespace
+
+VKLOC_REGISTER_VERB(35, addKeyframesVerb);
+
+}  // namespace vkloc::cli
