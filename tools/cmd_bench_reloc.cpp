@@ -37,6 +37,7 @@ struct RelocBenchArgs {
   double retrieval_m = 1.0;     ///< Retrieval success: top keyframe within this ...
   double retrieval_deg = 30.0;  ///< ... and this of the query.
   int candidates = RelocalizationOptions{}.candidates;
+  int refined = RelocalizationOptions{}.refined_probes;
   std::string keyframes = "sync";
   int trials = 0;              ///< Forced-loss trials (0: none).
   std::string loss = "black";  ///< black | jump.
@@ -72,6 +73,7 @@ std::unique_ptr<Localizer> makeLocalizer(const Setup& s, const RelocBenchArgs& a
   localizer_args.apply(options);
   setSequenceInertial(s.seq, imu, options);
   options.relocalization.candidates = a.candidates;
+  options.relocalization.refined_probes = a.refined;
   auto localizer = take(Localizer::create(s.model, s.camera, options, s.accelerator));
   check(localizer->setKeyframeDatabase(s.db));
   return localizer;
@@ -282,6 +284,9 @@ void addRelocBench(CLI::App& bench) {
       ->check(CLI::Range(0.0, 1e7))
       ->capture_default_str();
   reloc->add_option("--candidates", args->candidates, "Keyframes aligned per search")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  reloc->add_option("--refined", args->refined, "Probed starts aligned fully per search")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
   reloc->add_option("--keyframes", args->keyframes, "Keyframe threading: sync | worker")->capture_default_str();

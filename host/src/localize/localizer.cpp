@@ -203,6 +203,7 @@ struct Localizer::Impl {
   int untracked = 0;                          ///< Frames in a row not tracked.
   int failed_searches = 0;                    ///< Searches since the last tracked frame that found nothing.
   std::optional<int64_t> last_tracked_t_ns;   ///< Time of the last tracked frame.
+  std::optional<ImuSample> last_imu;          ///< Newest IMU reading taken (given again after a relocalized reset).
 
   /// Pyramid level whose basin covers the prediction's uncertainty (LocalizerOptions::max_search_level).
   int searchLevel(const std::optional<MotionPrediction>& prediction, double scene_depth_m) const {
@@ -573,11 +574,23 @@ struct Localizer::Impl {
   /// (velocity unknown) unless `prediction` is an IMU prediction the pose agrees with (its gate):
   /// a prior that bridged the loss keeps its velocity.
   void adoptRelocalized(const TrackResult& track, int64_t t_ns, const ImageU8& gray,
-                        const std::optional<MotionPrediction>& prediction, LocalizationResult& out) {
+                        const std::optional<MotionPrediction>& prediction, std::optional<int64_t> previous_t_ns,
+                        LocalizationResult& out) {
     const Keyframe& keyframe = *keyframes->current();
     const bool agrees = prediction && prediction->inertial &&
                         motion->consistent(*prediction, track.T_world_camera, track.covariance, keyframe.scene_depth_m);
-    if (!agrees) motion->reset(track.T_world_camera, std::nullopt);
+    if (!agrees) {
+      // The velocity from the previous frame when that one was trusted too (a search that
+      // goes on frame after frame), else unknown.
+      std::optional<Eigen::Vector3d> v_world;
+      if (last_tracked_gray && previous_t_ns && last_tracked_gray->t_ns == *previous_t_ns && t_ns > *previous_t_ns) {
+        v_world = (track.T_world_camera.translation() - last_tracked_gray->T_world_camera.translation()) /
+                  (static_cast<double>(t_ns - *previous_t_ns) * 1e-9);
+      }
+      motion->reset(track.T_world_camera, v_world);
+      // The reset forgets the IMU readings; the filter starts at a visual pose only after one.
+      if (last_imu && last_imu->t_ns <= t_ns) (void)motion->addImu(*last_imu);
+    }
     motion->setSceneDepth(keyframe.scene_depth_m);
     motion->addVisualPose(t_ns, track.T_world_camera, track.covariance);
     keyframes->frameTracked(track.quality);
@@ -750,6 +763,7 @@ void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vec
   m.untracked = 0;
   m.failed_searches = 0;
   m.last_tracked_t_ns.reset();
+  m.last_imu.reset();
   m.motion->reset(T_world_camera, v_world_camera);  // timestamps may start over
 }
 
@@ -792,7 +806,11 @@ Status Localizer::startSearch(const std::optional<SearchRegion>& region) {
   return Status::success();
 }
 
-Status Localizer::addImu(const ImuSample& sample) { return impl_->motion->addImu(sample); }
+Status Localizer::addImu(const ImuSample& sample) {
+  Status status = impl_->motion->addImu(sample);
+  if (status.ok()) impl_->last_imu = sample;
+  return status;
+}
 
 std::vector<FilterOutput> Localizer::takeFilterOutputs() { return impl_->motion->takeOutputs(); }
 
@@ -833,6 +851,7 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   }
   ++m.frame_index;
   if (m.last_t_ns) m.frame_interval_ns = t_ns - *m.last_t_ns;
+  const std::optional<int64_t> previous_t_ns = m.last_t_ns;
 
   // 0. Global initialization (startSearch): the frame is searched in the region until a pose is
   // verified; a guess given meanwhile ends the search (a user's or a GPS's pose).
@@ -848,7 +867,7 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
     if (!searched.ok()) return searched.error();
     if (*searched) {
       m.searching = false;
-      m.adoptRelocalized(found, t_ns, gray, std::nullopt, out);
+      m.adoptRelocalized(found, t_ns, gray, std::nullopt, previous_t_ns, out);
     }
     out.total_ms = msSince(t_start);
     return out;
@@ -1022,7 +1041,7 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
       Result<bool> searched = m.relocalize(gray, t_ns, region, found, out);
       if (!searched.ok()) return searched.error();
       if (*searched) {
-        m.adoptRelocalized(found, t_ns, gray, T_world_camera_guess ? std::nullopt : prediction, out);
+        m.adoptRelocalized(found, t_ns, gray, T_world_camera_guess ? std::nullopt : prediction, previous_t_ns, out);
       } else {
         ++m.failed_searches;
       }

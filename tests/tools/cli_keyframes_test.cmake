@@ -1,0 +1,61 @@
+# End-to-end test of the keyframe database: `vkloc keyframes build/info`, `vkloc track --db
+# --global-init` (a first pose found from the database), `vkloc bench reloc`, and the files and
+# options it refuses with one line. Arguments: -DVKLOC=path -DWORK=dir.
+cmake_minimum_required(VERSION 3.22)
+include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
+file(REMOVE_RECURSE ${WORK})
+
+set(seq ${WORK}/room)
+run_ok("simulate" simulate room easy --frames 6 --out ${seq} --no-priors)
+set(db ${WORK}/room.kdb)
+run_ok("keyframes build" keyframes build --sequence ${seq} --out ${db} --spacing 0.5 --margin 0.5 --headings 12
+       --renderer cpu --threads 2 -q)
+if(NOT out MATCHES "keyframes: [1-9][0-9]* of [0-9]+ views kept" OR NOT out MATCHES "7[0-9.]+ bytes per keyframe")
+  message(FATAL_ERROR "keyframes build output lacks the counts:\n${out}")
+endif()
+run_ok("keyframes info" keyframes info ${db} --sequence ${seq})
+if(NOT out MATCHES "matches the sequence's model")
+  message(FATAL_ERROR "keyframes info did not check the model:\n${out}")
+endif()
+
+# Global initialization: no pose given, the database searched around a prior 0.3 m off.
+run_ok("track --global-init" track --sequence ${seq} --out ${WORK}/gi/traj.txt --db ${db} --global-init
+       --prior-sigma 0.3 --backend cpu --keyframes sync)
+if(NOT out MATCHES "global initialization within" OR NOT out MATCHES "[1-9][0-9]* relocalized")
+  message(FATAL_ERROR "track --global-init did not relocalize:\n${out}")
+endif()
+file(STRINGS ${WORK}/gi/traj_frames.csv rows)
+list(GET rows 0 header)
+list(GET rows 1 first)
+if(NOT header MATCHES "relocalization_candidates,search_radius_m,relocalization_ms$" OR NOT first MATCHES
+                                                                                         "^[0-9]+,relocalized,")
+  message(FATAL_ERROR "frames log: header '${header}', first frame '${first}'")
+endif()
+json_number(median ${WORK}/gi/traj_report/track.json translation_median_m)
+if(median GREATER 0.05)
+  message(FATAL_ERROR "global initialization tracked with a median error of ${median} m")
+endif()
+
+run_ok("bench reloc" bench reloc --sequence ${seq} --db ${db} --queries 3 --no-vulkan)
+if(NOT out MATCHES "ms per 1000 keyframes" OR NOT out MATCHES "recovered \\(verified")
+  message(FATAL_ERROR "bench reloc output lacks its figures:\n${out}")
+endif()
+
+# Refused with one line: a truncated database, one built for another model, --global-init
+# without a database, a placement that would render too many views.
+file(SIZE ${db} size)
+math(EXPR cut_size "${size} - 100")
+execute_process(COMMAND head -c ${cut_size} ${db} OUTPUT_FILE ${WORK}/cut.kdb RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "head -c failed")
+endif()
+run_fails("truncated database" "cut.kdb: truncated or damaged" keyframes info ${WORK}/cut.kdb)
+run_ok("other model's database" keyframes build --model city --intrinsics 500,500,319.5,239.5,640,480
+       --volume 0,0,20,10,10,20 --spacing 10 --headings 2 --tilts 45 --renderer cpu --out ${WORK}/city.kdb -q)
+run_fails("database of another model" "another model" track --sequence ${seq} --out ${WORK}/x/traj.txt
+          --db ${WORK}/city.kdb --backend cpu)
+run_fails("global init without a database" "--global-init needs --db" track --sequence ${seq}
+          --out ${WORK}/x/traj.txt --global-init --backend cpu)
+run_fails("too many views" "exceed the limit" keyframes build --sequence ${seq} --out ${WORK}/x.kdb --spacing 0.001
+          --renderer cpu)
+run_fails("missing database" "not|No such" track --sequence ${seq} --out ${WORK}/x/traj.txt --db ${WORK}/nope.kdb)
