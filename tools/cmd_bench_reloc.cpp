@@ -38,6 +38,7 @@ struct RelocBenchArgs {
   double retrieval_deg = 30.0;  ///< ... and this of the query.
   int candidates = RelocalizationOptions{}.candidates;
   int refined = RelocalizationOptions{}.refined_probes;
+  int rerank = RelocalizationOptions{}.rerank_candidates;
   std::string keyframes = "sync";
   int trials = 0;              ///< Forced-loss trials (0: none).
   std::string loss = "black";  ///< black | jump.
@@ -74,6 +75,7 @@ std::unique_ptr<Localizer> makeLocalizer(const Setup& s, const RelocBenchArgs& a
   setSequenceInertial(s.seq, imu, options);
   options.relocalization.candidates = a.candidates;
   options.relocalization.refined_probes = a.refined;
+  options.relocalization.rerank_candidates = a.rerank;
   auto localizer = take(Localizer::create(s.model, s.camera, options, s.accelerator));
   check(localizer->setKeyframeDatabase(s.db));
   return localizer;
@@ -285,6 +287,9 @@ void addRelocBench(CLI::App& bench) {
       ->capture_default_str();
   reloc->add_option("--candidates", args->candidates, "Keyframes aligned per search")
       ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  reloc->add_option("--rerank", args->rerank, "Nearest keyframes rendered small and re-ranked (0: none)")
+      ->check(CLI::Range(0, 1000))
       ->capture_default_str();
   reloc->add_option("--refined", args->refined, "Probed starts aligned fully per search")
       ->check(CLI::Range(1, 100))

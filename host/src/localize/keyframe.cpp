@@ -64,6 +64,12 @@ Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeReques
   return std::shared_ptr<const Keyframe>(std::move(keyframe));
 }
 
+Result<RenderOutput> KeyframeMaker::renderView(const PinholeCamera& camera, const Pose& T_world_camera) {
+  RenderSettings settings = render_;
+  settings.outputs = kRenderColor | kRenderDepth;
+  return renderer_->render(camera, T_world_camera, settings);
+}
+
 KeyframeWorker::KeyframeWorker(std::unique_ptr<KeyframeMaker> maker, bool background)
     : maker_(std::move(maker)), description_(maker_->describe()), background_(background) {
   thread_ = std::thread([this] { run(); });
@@ -138,6 +144,12 @@ Result<std::shared_ptr<const Keyframe>> KeyframeWorker::makeNow(const KeyframeRe
   discard();
   std::lock_guard<std::mutex> maker_lock(maker_mutex_);
   return maker_->make(request);
+}
+
+Result<RenderOutput> KeyframeWorker::renderNow(const PinholeCamera& camera, const Pose& T_world_camera) {
+  discard();
+  std::lock_guard<std::mutex> maker_lock(maker_mutex_);
+  return maker_->renderView(camera, T_world_camera);
 }
 
 void KeyframeWorker::discard() {

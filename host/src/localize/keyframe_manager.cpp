@@ -69,6 +69,10 @@ Status KeyframeManager::makeNow(KeyframeRequest request, double& render_ms, doub
   return Status::success();
 }
 
+Result<RenderOutput> KeyframeManager::renderView(const PinholeCamera& camera, const Pose& T_world_camera) {
+  return worker_ ? worker_->renderNow(camera, T_world_camera) : maker_->renderView(camera, T_world_camera);
+}
+
 bool KeyframeManager::request(KeyframeRequest request) {
   if (!worker_ || worker_->busy()) return false;
   request.dropped_kinds = droppedKinds();

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "vkloc/core/clock.hpp"
 #include "vkloc/core/numeric.hpp"
@@ -65,14 +67,16 @@ Status validateOptions(const LocalizerOptions& o) {
                      "Localizer: need restart_after_refusals >= 0 and restart_min_score in 0..1");
   }
   const RelocalizationOptions& l = o.relocalization;
-  if (l.candidates < 1 || l.candidates > 100 || l.refined_probes < 1 || l.refined_probes > 100 || l.depth_steps < 0 ||
-      l.depth_steps > 5 || !finiteIn(l.depth_step, 0.0, 1.0) || l.after_untracked_frames < 0 || l.refinements < 0 ||
-      l.refinements > 10 || l.shift_starts < 0 || l.shift_starts > 5 || !finiteIn(l.min_radius_m, 0.0, 1e7) ||
+  if (l.candidates < 1 || l.candidates > 100 || l.rerank_candidates < 0 || l.rerank_candidates > 1000 ||
+      l.refined_probes < 1 || l.refined_probes > 100 || l.depth_steps < 0 || l.depth_steps > 5 ||
+      !finiteIn(l.depth_step, 0.0, 1.0) || l.after_untracked_frames < 0 || l.refinements < 0 || l.refinements > 10 ||
+      l.shift_starts < 0 || l.shift_starts > 5 || !finiteIn(l.min_radius_m, 0.0, 1e7) ||
       !finiteIn(l.growth_m_s, 0.0, 1e4) || !finiteIn(l.max_radius_m, 0.0, 1e7) ||
       !finiteIn(l.min_contrast, 0.0, 255.0) || !finiteIn(l.min_score, 0.0, 1.0) ||
       !finiteIn(l.confident_score, 0.0, 1.0) || !finiteIn(l.min_response, 0.0, 1.0)) {
     return makeError(ErrorCode::kInvalidArgument,
-                     "Localizer: relocalization needs candidates and refined_probes in 1..100, depth_steps in 0..5, "
+                     "Localizer: relocalization needs candidates and refined_probes in 1..100, rerank_candidates in "
+                     "0..1000, depth_steps in 0..5, "
                      "depth_step in 0..1, after_untracked_frames >= 0, refinements "
                      "in 0..10, shift_starts in 0..5, radii and growth >= 0, min_contrast in 0..255 and scores and "
                      "min_response in 0..1");
@@ -429,8 +433,39 @@ struct Localizer::Impl {
     }
     Result<GlobalDescriptor> descriptor = globalDescriptor(gray);
     if (!descriptor.ok()) return descriptor.error();
-    const std::vector<KeyframeCandidate> candidates =
-        database->query(*descriptor, static_cast<size_t>(o.candidates), region);
+    std::vector<KeyframeCandidate> candidates =
+        database->query(*descriptor, static_cast<size_t>(std::max(o.candidates, o.rerank_candidates)), region);
+    if (candidates.size() > static_cast<size_t>(o.candidates)) {
+      // Re-ranking: each candidate rendered 160 pixels wide and compared with the live image by
+      // the peak of their phase correlation (a shift of the whole view does not lower it).
+      const auto t_rank = SteadyClock::now();
+      const double s = 160.0 / camera.width;
+      PinholeCamera small;
+      small.width = 160;
+      small.height = std::max(16, static_cast<int>(std::lround(camera.height * s)));
+      small.fx = camera.fx * s;
+      small.fy = camera.fy * s;
+      small.cx = (camera.cx + 0.5) * s - 0.5;
+      small.cy = (camera.cy + 0.5) * s - 0.5;
+      ImageU8 live_small(small.width, small.height, 1);
+      cv::resize(cv::Mat(gray.height, gray.width, CV_8UC1, const_cast<uint8_t*>(gray.data.data())),
+                 cv::Mat(small.height, small.width, CV_8UC1, live_small.data.data()),
+                 cv::Size(small.width, small.height), 0, 0, cv::INTER_AREA);
+      std::vector<std::pair<double, size_t>> ranked;
+      for (size_t k = 0; k < candidates.size(); ++k) {
+        Result<RenderOutput> view =
+            keyframes->renderView(small, database->keyframes()[candidates[k].index].T_world_camera);
+        if (!view.ok()) return view.error();
+        Result<std::vector<ImageShift>> shift =
+            estimateImageShifts(view->gray, live_small, small, Eigen::Matrix3d::Identity(), 0, 1);
+        ranked.emplace_back(shift.ok() && !shift->empty() ? shift->front().response : 0.0, k);
+      }
+      std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+      std::vector<KeyframeCandidate> kept;
+      for (size_t k = 0; k < static_cast<size_t>(o.candidates); ++k) kept.push_back(candidates[ranked[k].second]);
+      candidates = std::move(kept);
+      out.render_ms += msSince(t_rank);
+    }
     keyframes->reset();
     uploaded_id = 0;
     const int deepest = std::max(0, std::min(options.max_search_level, options.live.levels - 1));
@@ -948,10 +983,10 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray
   out.verify_score = verificationScore(verificationFeatures(track, keyframe.scene_depth_m), m.options.verification);
   out.keyframe_id = keyframe.id;
   out.keyframe_age_frames = m.frame_index - keyframe.request.frame_index;
-  // After a loss the prediction may be far off and the alignment may lock onto wrong edges:
-  // with a database to relocalize from, a pose is taken only when it is verified.
-  if (m.database && m.untracked > 0 && track.state == TrackingState::kTracking &&
-      out.verify_score < m.options.verification.min_score) {
+  // With a database to relocalize from, a pose is taken only when it is verified: an alignment
+  // that locked onto wrong edges (after a loss, a jump, a wrong prediction) goes to the search
+  // instead of being tracked on.
+  if (m.database && track.state == TrackingState::kTracking && out.verify_score < m.options.verification.min_score) {
     track.state = TrackingState::kLost;
     out.state = TrackingState::kLost;
   }

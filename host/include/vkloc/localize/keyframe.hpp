@@ -56,6 +56,9 @@ class KeyframeMaker {
   Result<std::shared_ptr<const Keyframe>> make(const KeyframeRequest& request);
   /// The renderer's describe().
   std::string describe() const { return renderer_->describe(); }
+  /// A plain render (colour and depth) at any camera and pose, e.g. a small view to compare with
+  /// the live image. Renderer errors as they are.
+  Result<RenderOutput> renderView(const PinholeCamera& camera, const Pose& T_world_camera);
 
  private:
   std::unique_ptr<Renderer> renderer_;
@@ -91,6 +94,9 @@ class KeyframeWorker {
   /// Drops the waiting request, the keyframe in progress and unclaimed results, then makes
   /// `request` on the calling thread (after the keyframe in progress is done with the maker).
   Result<std::shared_ptr<const Keyframe>> makeNow(const KeyframeRequest& request);
+  /// KeyframeMaker::renderView on the calling thread (after the keyframe in progress is done with
+  /// the maker); drops the waiting request as makeNow does.
+  Result<RenderOutput> renderNow(const PinholeCamera& camera, const Pose& T_world_camera);
   /// Drops the waiting request and unclaimed results (reset, loss).
   void discard();
   std::string describe() const { return description_; }

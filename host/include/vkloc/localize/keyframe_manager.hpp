@@ -99,6 +99,9 @@ class KeyframeManager {
   bool request(KeyframeRequest request);
   /// Worker mode: makes the newest finished keyframe current; returns whether it changed.
   Result<bool> adoptFinished();
+  /// A plain render (colour, depth) at any camera and pose with the keyframes' renderer, on the
+  /// calling thread (worker mode: drops the waiting request). Renderer errors as they are.
+  Result<RenderOutput> renderView(const PinholeCamera& camera, const Pose& T_world_camera);
   /// Makes an earlier keyframe current again (a search going back to a candidate's). Null is
   /// ignored.
   void restore(std::shared_ptr<const Keyframe> keyframe) {

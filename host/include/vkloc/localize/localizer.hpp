@@ -66,6 +66,10 @@ const char* localizerBackendName(LocalizerBackend backend);
 /// on the deepest level alone; only the best refined_probes are aligned fully.
 struct RelocalizationOptions {
   int candidates = 6;  ///< Database keyframes aligned per search, nearest descriptor first (1..100).
+  /// When larger than `candidates`: this many nearest keyframes are rendered small (160 pixels
+  /// wide) and ranked by the phase-correlation peak of the render against the live image; the
+  /// best `candidates` are aligned (0..1000).
+  int rerank_candidates = 30;
   /// After a loss: search on the frame that makes this many untracked frames in a row (tracked
   /// frames neither lost nor bridged by the IMU). 0 = never relocalize after a loss.
   int after_untracked_frames = 1;
