@@ -7,12 +7,14 @@
 #   city_starts, room_starts  from every 10th frame at its ground-truth pose with no velocity,
 #                 20 frames each (synchronous keyframes): every start tracks all 20 frames with
 #                 every error <= 2 % of the median scene depth
+#   city_starts_db, room_starts_db  the same with a keyframe database (vkloc keyframes build, made
+#                 here: room 0.3 m grid, city 8 m): relocalization on, and poses taken only when verified
 # Skipped when the sequences are not there (a "-- skipped: " line, ctest SKIP_REGULAR_EXPRESSION:
 # Debian 12 has CMake 3.25, without cmake_language(EXIT)).
 cmake_minimum_required(VERSION 3.22)
 include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
 
-string(REGEX REPLACE "_starts$" "" scene "${CASE}")
+string(REGEX REPLACE "_starts(_db)?$" "" scene "${CASE}")
 set(seq ${DATA}/cycles-${scene})
 if(NOT EXISTS ${seq}/sequence.yaml)
   message(STATUS "skipped: no development sequence at ${seq}")
@@ -20,14 +22,26 @@ if(NOT EXISTS ${seq}/sequence.yaml)
 endif()
 
 set(failures "")
-if(CASE MATCHES "_starts$")
+if(CASE MATCHES "_starts(_db)?$")
   set(passed 0)
   set(count 0)
+  set(db_args "")
+  if(CASE MATCHES "_db$")
+    set(db ${WORK}/${CASE}.kdb)
+    if(scene STREQUAL "room")
+      set(grid --spacing 0.3 --margin 0.5)
+    else()
+      set(grid --spacing 8)
+    endif()
+    run("keyframes build" ${VKLOC} keyframes build --sequence ${seq} --out ${db} ${grid} --renderer cpu --quiet)
+    message(STATUS "${out}")
+    set(db_args --db ${db})
+  endif()
   foreach(start 0 10 20 30 40 50 60 70 80 90 100)
     set(dir ${WORK}/${CASE}_${start})
     file(REMOVE_RECURSE ${dir})
     run("start ${start}" ${VKLOC} track --sequence ${seq} --out ${dir}/t.txt --report ${dir}/report --keyframes sync
-        --start-frame ${start} --max-frames 20 --filter ekf --quiet)
+        --start-frame ${start} --max-frames 20 --filter ekf --quiet ${db_args})
     set(j ${dir}/report/track.json)
     json_number(lost ${j} lost)
     json_number(depth ${j} scene_depth_median_m)

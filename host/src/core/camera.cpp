@@ -1,5 +1,6 @@
 #include "vkloc/core/camera.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "vkloc/core/text.hpp"
@@ -19,6 +20,18 @@ Status validateCamera(const PinholeCamera& c) {
   if (c.width < 1 || c.width > 16384) return bad("width", c.width);
   if (c.height < 1 || c.height > 16384) return bad("height", c.height);
   return Status::success();
+}
+
+PinholeCamera scaledCamera(const PinholeCamera& camera, int width) {
+  const double s = static_cast<double>(width) / camera.width;
+  PinholeCamera out;
+  out.width = width;
+  out.height = std::max(1, static_cast<int>(std::lround(camera.height * s)));
+  out.fx = camera.fx * s;
+  out.fy = camera.fy * s;
+  out.cx = (camera.cx + 0.5) * s - 0.5;
+  out.cy = (camera.cy + 0.5) * s - 0.5;
+  return out;
 }
 
 }  // namespace vkloc

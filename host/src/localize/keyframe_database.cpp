@@ -49,19 +49,6 @@ T get(const std::string& in, size_t& at) {
   return value;
 }
 
-/// A copy of `camera` `width` pixels wide with the same field of view.
-PinholeCamera scaledCamera(const PinholeCamera& camera, int width) {
-  const double s = static_cast<double>(width) / camera.width;
-  PinholeCamera out;
-  out.width = width;
-  out.height = std::max(1, static_cast<int>(std::lround(camera.height * s)));
-  out.fx = camera.fx * s;
-  out.fy = camera.fy * s;
-  out.cx = (camera.cx + 0.5) * s - 0.5;
-  out.cy = (camera.cy + 0.5) * s - 0.5;
-  return out;
-}
-
 }  // namespace
 
 Result<ImageU8> descriptorThumbnail(const ImageU8& gray) {
@@ -280,17 +267,10 @@ Pose placementPose(const Eigen::Vector3d& position, const Eigen::Vector3d& up_wo
   const double h = heading_deg * M_PI / 180.0, t = tilt_deg * M_PI / 180.0;
   const Eigen::Vector3d horizontal = std::cos(h) * e1 + std::sin(h) * e2;
   const Eigen::Vector3d z = std::cos(t) * horizontal - std::sin(t) * up;  // optical axis
-  // Camera y points down in the image: x = y_down x z with y_down as close to -up as can be.
-  Eigen::Vector3d x = (-up).cross(z);
-  if (x.norm() < 1e-9) x = horizontal.cross(z);  // looking straight up or down: image up = heading
-  x.normalize();
-  const Eigen::Vector3d y = z.cross(x);
-  Pose T = Pose::Identity();
-  T.linear().col(0) = x;
-  T.linear().col(1) = y;
-  T.linear().col(2) = z;
-  T.translation() = position;
-  return T;
+  // No roll: image up as close to up as can be; straight up or down, image up is the heading.
+  const bool vertical = std::abs(std::cos(t)) < 1e-9;
+  Result<Pose> T = lookAt(position, position + z, vertical ? horizontal * (t > 0 ? 1.0 : -1.0) : up);
+  return T.ok() ? *T : Pose::Identity();
 }
 
 Status validateKeyframePlacement(const KeyframePlacement& p) {

@@ -439,14 +439,7 @@ struct Localizer::Impl {
       // Re-ranking: each candidate rendered 160 pixels wide and compared with the live image by
       // the peak of their phase correlation (a shift of the whole view does not lower it).
       const auto t_rank = SteadyClock::now();
-      const double s = 160.0 / camera.width;
-      PinholeCamera small;
-      small.width = 160;
-      small.height = std::max(16, static_cast<int>(std::lround(camera.height * s)));
-      small.fx = camera.fx * s;
-      small.fy = camera.fy * s;
-      small.cx = (camera.cx + 0.5) * s - 0.5;
-      small.cy = (camera.cy + 0.5) * s - 0.5;
+      const PinholeCamera small = scaledCamera(camera, 160);
       ImageU8 live_small(small.width, small.height, 1);
       cv::resize(cv::Mat(gray.height, gray.width, CV_8UC1, const_cast<uint8_t*>(gray.data.data())),
                  cv::Mat(small.height, small.width, CV_8UC1, live_small.data.data()),

@@ -23,4 +23,8 @@ struct PinholeCamera {
 /// the size within 1..16384. Returns kInvalidArgument naming the bad field otherwise.
 Status validateCamera(const PinholeCamera& camera);
 
+/// The same field of view at another width (pixels): focal lengths and principal point scaled
+/// in pixel-centre coordinates, height rounded (at least 1).
+PinholeCamera scaledCamera(const PinholeCamera& camera, int width);
+
 }  // namespace vkloc
