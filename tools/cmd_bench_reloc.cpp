@@ -204,8 +204,14 @@ void runRelocBench(const RelocBenchArgs& a) {
     size_t start = static_cast<size_t>(rng.uniform(0.0, static_cast<double>(s.seq.images.size() - span - 1)));
     // A jump: the frames after the loss come from where the camera is jump_m from the last one.
     size_t resume = start + lead + (a.loss == "black" ? black : 1);
+    const std::optional<Pose> T0 = groundTruthAt(s.seq.groundtruth, s.seq.images[start].t_ns);
+    const std::optional<Pose> loss_pose = groundTruthAt(s.seq.groundtruth, s.seq.images[start + lead].t_ns);
+    if (!T0 || !loss_pose) {  // no ground truth to start from or to measure the jump from
+      ++skipped;
+      continue;
+    }
     if (a.loss == "jump") {
-      const Pose at_loss = *groundTruthAt(s.seq.groundtruth, s.seq.images[start + lead].t_ns);
+      const Pose& at_loss = *loss_pose;
       size_t k = resume;
       while (k + 6 < s.seq.images.size()) {
         const std::optional<Pose> p = groundTruthAt(s.seq.groundtruth, s.seq.images[k].t_ns);
@@ -218,7 +224,6 @@ void runRelocBench(const RelocBenchArgs& a) {
       }
       resume = k;
     }
-    const std::optional<Pose> T0 = groundTruthAt(s.seq.groundtruth, s.seq.images[start].t_ns);
     tracker->reset(*T0);
     size_t next_imu = 0;
     int recovered_after = -1;
@@ -268,7 +273,7 @@ void runRelocBench(const RelocBenchArgs& a) {
                         : fmt::format("jump of {:.1f} m", a.jump_m).c_str(),
       ok, done, done > 0 ? 100.0 * static_cast<double>(ok) / static_cast<double>(done) : 0.0, wrong_trials,
       percentile(frames_to_recover, 0.5),
-      skipped > 0 ? fmt::format(" ({} trials skipped: no such jump)", skipped).c_str() : "");
+      skipped > 0 ? fmt::format(" ({} trials skipped: no such jump or no ground truth)", skipped).c_str() : "");
 }
 
 }  // namespace

@@ -105,11 +105,17 @@ void runBuild(const BuildArgs& a) {
   // One Vulkan renderer (the device is parallel itself), or one CPU renderer per core.
   std::vector<std::unique_ptr<Renderer>> renderers;
   std::shared_ptr<GpuContext> context;
-  if (a.renderer == "vulkan" || a.renderer == "auto") {
+  if (a.renderer == "vulkan") {
     context = a.device.create();
     std::shared_ptr<Accelerator> accelerator = take(makeGpuAccelerator(context));
-    if (a.renderer == "vulkan" || !accelerator->isCpuDriver()) {
-      renderers.push_back(take(accelerator->createRenderer(model)));
+    renderers.push_back(take(accelerator->createRenderer(model)));
+  } else if (a.renderer == "auto") {
+    try {  // a GPU when there is one; no Vulkan device at all is not an error here
+      context = a.device.create();
+      std::shared_ptr<Accelerator> accelerator = take(makeGpuAccelerator(context));
+      if (!accelerator->isCpuDriver()) renderers.push_back(take(accelerator->createRenderer(model)));
+    } catch (const Failure&) {
+      context.reset();
     }
   } else if (a.renderer != "cpu") {
     throw Failure{fmt::format("--renderer '{}': expected auto, cpu or vulkan", a.renderer)};

@@ -131,7 +131,8 @@ void run(const TrackArgs& a) {
   if (a.start_frame >= seq.images.size()) {
     throw Failure{fmt::format("--start-frame {}: the sequence has {} images", a.start_frame, seq.images.size())};
   }
-  const Pose T_init = initialPose(seq, a.init_offset, a.start_frame);
+  // A global initialization needs no start pose (the search finds it).
+  const Pose T_init = a.global_init ? Pose::Identity() : initialPose(seq, a.init_offset, a.start_frame);
   // The velocity at the start is the sequence's own only when it starts at its first image.
   const std::optional<Eigen::Vector3d> v_init =
       a.start_frame == 0 ? seq.initial_velocity_world : std::optional<Eigen::Vector3d>{};
@@ -152,7 +153,8 @@ void run(const TrackArgs& a) {
   if (a.global_init) {
     if (a.db.empty()) throw Failure{"--global-init needs --db (vkloc keyframes build)"};
     // The region: a GPS-like prior at the first image (prior.csv, or simulated from the ground
-    // truth with --prior-sigma), 3.37 sigma (99 % of a 3-D Gaussian); else the whole database.
+    // truth with --prior-sigma), 3.37 sigma (99 % of a 3-D Gaussian) but at least the
+    // relocalization's smallest radius; else the whole database.
     std::optional<SearchRegion> region;
     const int64_t t_first = seq.images[a.start_frame].t_ns;
     if (a.prior_sigma_m > 0) {
@@ -162,14 +164,14 @@ void run(const TrackArgs& a) {
       region.emplace();
       region->center_world =
           truth->translation() + a.prior_sigma_m * Eigen::Vector3d(rng.gaussian(), rng.gaussian(), rng.gaussian());
-      region->radius_m = 3.37 * a.prior_sigma_m;
+      region->radius_m = std::max(3.37 * a.prior_sigma_m, options.relocalization.min_radius_m);
     } else if (!seq.priors.empty()) {
       auto near = std::min_element(seq.priors.begin(), seq.priors.end(), [&](const auto& x, const auto& y) {
         return std::llabs(x.t_ns - t_first) < std::llabs(y.t_ns - t_first);
       });
       region.emplace();
       region->center_world = near->p_world_body;
-      region->radius_m = 3.37 * near->sigma.maxCoeff();
+      region->radius_m = std::max(3.37 * near->sigma.maxCoeff(), options.relocalization.min_radius_m);
     }
     check(localizer->startSearch(region));
     search_line +=

@@ -128,8 +128,7 @@ uint64_t modelFingerprint(const Model& model) {
 void KeyframeDatabase::add(const DatabaseKeyframe& keyframe) {
   keyframes_.push_back(keyframe);
   const Eigen::Vector3d& t = keyframe.T_world_camera.translation();
-  positions_.insert(positions_.end(),
-                    {static_cast<float>(t.x()), static_cast<float>(t.y()), static_cast<float>(t.z())});
+  positions_.insert(positions_.end(), {t.x(), t.y(), t.z()});
 }
 
 std::vector<KeyframeCandidate> KeyframeDatabase::query(const GlobalDescriptor& descriptor, size_t k,
@@ -138,17 +137,17 @@ std::vector<KeyframeCandidate> KeyframeDatabase::query(const GlobalDescriptor& d
   if (k == 0) return out;
   out.reserve(std::min(keyframes_.size(), 4 * k + 16));
   const bool everywhere = !region || !std::isfinite(region->radius_m);
-  const float cx = region ? static_cast<float>(region->center_world.x()) : 0.f;
-  const float cy = region ? static_cast<float>(region->center_world.y()) : 0.f;
-  const float cz = region ? static_cast<float>(region->center_world.z()) : 0.f;
-  const float r2 = region && !everywhere ? static_cast<float>(region->radius_m * region->radius_m) : 0.f;
+  const double cx = region ? region->center_world.x() : 0.0;
+  const double cy = region ? region->center_world.y() : 0.0;
+  const double cz = region ? region->center_world.z() : 0.0;
+  const double r2 = region && !everywhere ? region->radius_m * region->radius_m : 0.0;
   // Keeps the k best seen so far in a max-heap on (distance, index): one pass, no sort of all.
   auto worse = [](const KeyframeCandidate& a, const KeyframeCandidate& b) {
     return a.distance != b.distance ? a.distance < b.distance : a.index < b.index;
   };
   for (size_t i = 0; i < keyframes_.size(); ++i) {
     if (!everywhere) {
-      const float dx = positions_[3 * i] - cx, dy = positions_[3 * i + 1] - cy, dz = positions_[3 * i + 2] - cz;
+      const double dx = positions_[3 * i] - cx, dy = positions_[3 * i + 1] - cy, dz = positions_[3 * i + 2] - cz;
       if (dx * dx + dy * dy + dz * dz > r2) continue;
     }
     const KeyframeCandidate c{i, hammingDistance(descriptor, keyframes_[i].descriptor)};
@@ -316,7 +315,11 @@ Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::ve
   }
   // Views are rendered 160 pixels wide (the thumbnail is 80x64; twice that averages the render's
   // aliasing away as a camera's optics do).
-  const PinholeCamera small = scaledCamera(camera, 2 * kThumbnailWidth);
+  // (Wider for a camera wider than 2.5:1, so that the view is at least 128 rows high.)
+  const int width =
+      std::max(2 * kThumbnailWidth,
+               static_cast<int>(std::ceil(2.0 * kThumbnailHeight * camera.width / std::max(1, camera.height))));
+  const PinholeCamera small = scaledCamera(camera, width);
   RenderSettings look = render;
   look.outputs = kRenderColor | kRenderDepth;
   look.cull_back_faces = false;

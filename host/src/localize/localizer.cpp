@@ -201,13 +201,14 @@ struct Localizer::Impl {
   // Relocalization and global initialization (RelocalizationOptions).
   std::shared_ptr<const KeyframeDatabase> database;
   uint64_t model_fingerprint = 0;
-  bool searching = false;                     ///< Global initialization in progress (startSearch).
-  std::optional<SearchRegion> search_region;  ///< Its region (nullopt: the whole database).
-  bool relocalizing = false;                  ///< A relocalization search is aligning (no point filter).
-  int untracked = 0;                          ///< Frames in a row not tracked.
-  int failed_searches = 0;                    ///< Searches since the last tracked frame that found nothing.
-  std::optional<int64_t> last_tracked_t_ns;   ///< Time of the last tracked frame.
-  std::optional<ImuSample> last_imu;          ///< Newest IMU reading taken (given again after a relocalized reset).
+  bool searching = false;                        ///< Global initialization in progress (startSearch).
+  std::optional<SearchRegion> search_region;     ///< Its region (nullopt: the whole database).
+  bool relocalizing = false;                     ///< A relocalization search is aligning (no point filter).
+  int untracked = 0;                             ///< Frames in a row not tracked.
+  int failed_searches = 0;                       ///< Searches since the last tracked frame that found nothing.
+  std::optional<int64_t> last_tracked_t_ns;      ///< Time of the last tracked frame.
+  std::optional<ImuSample> last_imu;             ///< Newest IMU reading taken (given again after a relocalized reset).
+  std::optional<int64_t> last_relocalized_t_ns;  ///< Time of the last relocalized frame.
 
   /// Pyramid level whose basin covers the prediction's uncertainty (LocalizerOptions::max_search_level).
   int searchLevel(const std::optional<MotionPrediction>& prediction, double scene_depth_m) const {
@@ -459,6 +460,10 @@ struct Localizer::Impl {
       candidates = std::move(kept);
       out.render_ms += msSince(t_rank);
     }
+    if (candidates.empty()) {  // no keyframe in the region: the current keyframe stays
+      out.relocalization_ms = msSince(t0);
+      return false;
+    }
     keyframes->reset();
     uploaded_id = 0;
     const int deepest = std::max(0, std::min(options.max_search_level, options.live.levels - 1));
@@ -505,6 +510,8 @@ struct Localizer::Impl {
       request.T_world_ref = T_candidate;
       request.keep_gray = o.shift_starts > 0;
       VKLOC_TRY_STATUS(keyframes->makeNow(request, out.render_ms, out.reference_ms));
+      // The backends hold the keyframe the probes align against (a device backend keeps it).
+      VKLOC_TRY_STATUS(uploadKeyframe());
       out.reference_rendered = true;
       const std::shared_ptr<const Keyframe> keyframe = keyframes->current();
       if (keyframe->reference.points.size() < 6) continue;
@@ -608,10 +615,11 @@ struct Localizer::Impl {
     const bool agrees = prediction && prediction->inertial &&
                         motion->consistent(*prediction, track.T_world_camera, track.covariance, keyframe.scene_depth_m);
     if (!agrees) {
-      // The velocity from the previous frame when that one was trusted too (a search that
-      // goes on frame after frame), else unknown.
+      // The velocity from the previous frame when that one was relocalized too (a search that
+      // goes on frame after frame), else unknown (a pose tracked before a jump is no reference).
       std::optional<Eigen::Vector3d> v_world;
-      if (last_tracked_gray && previous_t_ns && last_tracked_gray->t_ns == *previous_t_ns && t_ns > *previous_t_ns) {
+      if (last_tracked_gray && previous_t_ns && last_relocalized_t_ns == previous_t_ns &&
+          last_tracked_gray->t_ns == *previous_t_ns && t_ns > *previous_t_ns) {
         v_world = (track.T_world_camera.translation() - last_tracked_gray->T_world_camera.translation()) /
                   (static_cast<double>(t_ns - *previous_t_ns) * 1e-9);
       }
@@ -631,6 +639,7 @@ struct Localizer::Impl {
     last_tracked_gray->gray = gray;
     last_tracked_gray->T_world_camera = track.T_world_camera;
     last_tracked_gray->t_ns = t_ns;
+    last_relocalized_t_ns = t_ns;
     out.state = TrackingState::kRelocalized;
     out.T_world_camera = track.T_world_camera;
     out.covariance = track.covariance;
@@ -792,6 +801,7 @@ void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vec
   m.failed_searches = 0;
   m.last_tracked_t_ns.reset();
   m.last_imu.reset();
+  m.last_relocalized_t_ns.reset();
   m.motion->reset(T_world_camera, v_world_camera);  // timestamps may start over
 }
 

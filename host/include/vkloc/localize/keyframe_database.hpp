@@ -117,7 +117,7 @@ class KeyframeDatabase {
   uint64_t fingerprint_ = 0;
   PinholeCamera camera_;
   std::vector<DatabaseKeyframe> keyframes_;
-  std::vector<float> positions_;  ///< x, y, z per keyframe (the region test of query()).
+  std::vector<double> positions_;  ///< x, y, z per keyframe (the region test of query()).
 };
 
 /// Where the virtual cameras go: positions on a grid in a box of navigable space, several
