@@ -194,6 +194,8 @@ void runRelocBench(const RelocBenchArgs& a) {
   const int64_t frame_ns = s.seq.images.size() > 1 ? s.seq.images[1].t_ns - s.seq.images[0].t_ns : 50'000'000;
   const size_t lead = static_cast<size_t>(std::llround(1e9 / static_cast<double>(frame_ns)));
   const size_t black = static_cast<size_t>(std::llround(a.black_s * 1e9 / static_cast<double>(frame_ns)));
+  // Frames without an image to use after the loss starts: the black ones (none for a jump).
+  const size_t gap = a.loss == "black" ? black : 0;
   Xoshiro256 rng(a.seed);
   size_t ok = 0, wrong_trials = 0, skipped = 0;
   std::vector<double> frames_to_recover;
@@ -236,7 +238,7 @@ void runRelocBench(const RelocBenchArgs& a) {
         if (a.loss == "black" && f < lead + black) {
           blacked = true;
         } else {
-          i = resume + (f - lead - (a.loss == "black" ? black : 0));
+          i = resume + (f - lead - gap);
         }
       }
       if (i >= s.seq.images.size()) break;
@@ -245,7 +247,7 @@ void runRelocBench(const RelocBenchArgs& a) {
       ImageU8 gray = take(readImageU8(s.seq.imagePath(i), 1));
       if (blacked) std::fill(gray.data.begin(), gray.data.end(), uint8_t{0});
       const LocalizationResult r = take(tracker->localize(t_ns, gray));
-      if (f < lead + (a.loss == "black" ? black : 0) || blacked) continue;
+      if (f < lead + gap || blacked) continue;
       const std::optional<Pose> truth = groundTruthAt(s.seq.groundtruth, s.seq.images[i].t_ns);
       const bool trusted = r.state == TrackingState::kTracking || r.state == TrackingState::kRelocalized;
       if (!trusted || !truth) continue;
@@ -253,7 +255,7 @@ void runRelocBench(const RelocBenchArgs& a) {
       const double r_err = rotationAngleDeg(r.T_world_camera.linear().transpose() * truth->linear());
       const double depth = r.scene_depth_m > 0 ? r.scene_depth_m : 1.0;
       if (t_err <= a.goal_fraction * depth && r_err <= a.goal_deg) {
-        if (recovered_after < 0) recovered_after = static_cast<int>(f - lead - (a.loss == "black" ? black : 0));
+        if (recovered_after < 0) recovered_after = static_cast<int>(f - lead - gap);
       } else {
         accepted_wrong = true;
       }

@@ -256,6 +256,27 @@ struct Localizer::Impl {
     return uploadKeyframe();
   }
 
+  /// The live stages of `gray` on `backend` unless `ready` says they ran for this image.
+  Status ensureLive(EdgeTrackingBackend& backend, const ImageU8& gray, LocalizationResult& out, bool& ready) {
+    if (ready) return Status::success();
+    const auto t0 = SteadyClock::now();
+    VKLOC_TRY_STATUS(backend.setLiveImage(gray));
+    ready = true;
+    out.live_ms += msSince(t0);
+    return Status::success();
+  }
+
+  /// Options of a probe: a few Gauss-Newton steps on one pyramid level alone (the motion
+  /// search's and the relocalization's starts are ranked by them).
+  EdgeTrackerOptions probeOptions(int level, int iterations) const {
+    EdgeTrackerOptions probe = options.tracker;
+    probe.coarsest_level = level;
+    probe.finest_level = level;
+    probe.far_first_depth_quantile = 0;
+    probe.max_iterations = iterations;
+    return probe;
+  }
+
   /// Live stages (once per image) + alignment on `backend` from `start`.
   Result<TrackResult> align(EdgeTrackingBackend& backend, const ImageU8& gray, const Pose& start,
                             LocalizationResult& out, bool& ready) {
@@ -267,13 +288,8 @@ struct Localizer::Impl {
       lost.T_camera_ref = start.inverse() * reference.T_world_ref;
       return lost;
     }
-    auto t0 = SteadyClock::now();
-    if (!ready) {
-      VKLOC_TRY_STATUS(backend.setLiveImage(gray));
-      ready = true;
-      out.live_ms += msSince(t0);
-    }
-    t0 = SteadyClock::now();
+    VKLOC_TRY_STATUS(ensureLive(backend, gray, out, ready));
+    const auto t0 = SteadyClock::now();
     std::optional<EdgeReference> slow;
     const std::optional<Pose> last_pose = motion->lastPose();
     if (options.max_point_motion_px > 0 && last_pose && tracked_since_reset && !relocalizing) {
@@ -384,11 +400,7 @@ struct Localizer::Impl {
       }
     }
     // Probes: a few Gauss-Newton steps on the deepest level alone, scored by their inliers there.
-    EdgeTrackerOptions probe = options.tracker;
-    probe.coarsest_level = grid.level;
-    probe.finest_level = grid.level;
-    probe.far_first_depth_quantile = 0;
-    probe.max_iterations = 5;
+    const EdgeTrackerOptions probe = probeOptions(grid.level, 5);
     struct Candidate {
       Pose start;
       double inliers;
@@ -484,17 +496,8 @@ struct Localizer::Impl {
     // Stage 1: a keyframe at each candidate; starts at its pose and at that pose turned by the
     // image shifts between its render and the live image; each start probed with a few
     // Gauss-Newton steps on the deepest level alone and scored there.
-    if (!live_ready) {
-      const auto t_live = SteadyClock::now();
-      VKLOC_TRY_STATUS(active->setLiveImage(gray));
-      live_ready = true;
-      out.live_ms += msSince(t_live);
-    }
-    EdgeTrackerOptions probe = options.tracker;
-    probe.coarsest_level = deepest;
-    probe.finest_level = deepest;
-    probe.far_first_depth_quantile = 0;
-    probe.max_iterations = 10;
+    VKLOC_TRY_STATUS(ensureLive(*active, gray, out, live_ready));
+    const EdgeTrackerOptions probe = probeOptions(deepest, 10);
     struct Probe {
       std::shared_ptr<const Keyframe> keyframe;
       Pose start = Pose::Identity();
