@@ -22,6 +22,7 @@ struct SimulateArgs {
   CameraArgs camera;
   DeviceArgs device;
   std::string trajectory;
+  std::string lens;  ///< pinhole | radtan | fisheye (scenarioCamera).
   double duration_s = 15.0;
   double rate_hz = 20.0;
   std::string out_dir;
@@ -94,30 +95,27 @@ void applyOverrides(const CLI::App& cmd, const SimulateArgs& a, SimulationOption
   o.max_frames = a.frames;
 }
 
-SequenceCamera loadCameraArg(const CameraArgs& args, const SequenceCamera& fallback) {
-  SequenceCamera cam = fallback;
-  if (!args.file.empty()) {
-    // A sequence camera.yaml (with T_body_camera) when it reads as one, else plain intrinsics.
-    auto full = loadSequenceCamera(args.file);
-    if (full.ok()) return *full;
-  }
-  if (!args.file.empty() || !args.intrinsics.empty()) cam.intrinsics = args.get();
-  return cam;
-}
-
 void run(const CLI::App& cmd, const SimulateArgs& a) {
   Model model;
   SimulationOptions options;
   std::string out_dir = a.out_dir;
   if (!a.scene.empty()) {
-    if (given(cmd, "--model") || given(cmd, "--trajectory")) {
-      throw Failure{
-          "a built-in scenario (city|room easy|hard) fixes the model and trajectory; drop --model/--trajectory"};
-    }
+    if (given(cmd, "--model")) throw Failure{"a built-in scenario (city|room easy|hard) fixes the model; drop --model"};
     const std::string difficulty = a.difficulty.empty() ? (a.hard ? "hard" : "easy") : a.difficulty;
     model = take(scenarioModel(a.scene));
     options = take(scenarioOptions(a.scene, difficulty, a.seed, model.bounds));
-    if (out_dir.empty()) out_dir = fmt::format("sim/{}_{}", a.scene, difficulty);
+    std::string suffix;
+    if (!a.trajectory.empty()) {
+      options.trajectory = take(parseTrajectoryKind(a.trajectory));
+      options.camera.T_body_camera = defaultBodyCamera(options.trajectory);
+      suffix += "_" + a.trajectory;
+    }
+    if (!a.lens.empty()) {
+      options.camera = take(scenarioCamera(a.lens, options.trajectory));
+      if (a.lens != "pinhole") suffix += "_" + a.lens;
+    }
+    options.name += suffix;
+    if (out_dir.empty()) out_dir = fmt::format("sim/{}_{}{}", a.scene, difficulty, suffix);
   } else {
     if (!a.difficulty.empty()) throw Failure{"give a scenario name (city or room) before the difficulty"};
     model = a.model.load();
@@ -127,8 +125,7 @@ void run(const CLI::App& cmd, const SimulateArgs& a) {
     options.trajectory = take(parseTrajectoryKind(kind));
     options.name = fmt::format("{}_{}", name, kind);
     options.seed = a.seed;
-    options.camera.intrinsics = PinholeCamera{500.0, 500.0, 319.5, 239.5, 640, 480};
-    options.camera.T_body_camera = defaultBodyCamera(options.trajectory);
+    options.camera = take(scenarioCamera(a.lens.empty() ? "pinhole" : a.lens, options.trajectory));
     options.duration_s = a.duration_s;
     options.rate_hz = a.rate_hz;
     if (indoor) options.far_m = 100.0;
@@ -141,7 +138,7 @@ void run(const CLI::App& cmd, const SimulateArgs& a) {
     }
     if (out_dir.empty()) out_dir = fmt::format("sim/{}_{}", name, kind);
   }
-  options.camera = loadCameraArg(a.camera, options.camera);
+  options.camera = a.camera.getFull(options.camera);
   applyOverrides(cmd, a, options);
 
   RendererFactory factory;
@@ -204,7 +201,10 @@ static void addSimulateVerb(CLI::App& app) {
   args->model.add(*cmd);
   args->camera.add(*cmd);
   args->device.add(*cmd);
-  cmd->add_option("--trajectory,-t", args->trajectory, "drone | handheld | aggressive | orbit (default by model)");
+  cmd->add_option("--trajectory,-t", args->trajectory,
+                  "drone | drone_agile | handheld | aggressive | orbit (default by model or scenario)");
+  cmd->add_option("--lens", args->lens,
+                  "pinhole (640x480) | radtan (the same, barrel distortion) | fisheye (800x800, 210 deg)");
   cmd->add_option("--duration", args->duration_s, "Trajectory length, seconds")->capture_default_str();
   cmd->add_option("--rate", args->rate_hz, "Camera frame rate, Hz")->capture_default_str();
   cmd->add_option("--out,-o", args->out_dir, "Output folder (default sim/<scenario>_<difficulty>)");

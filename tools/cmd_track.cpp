@@ -42,6 +42,8 @@ struct TrackArgs {
   DeviceArgs device;
   bool no_vulkan = false;
   OverlayArgs overlay;
+  CameraArgs camera;         ///< Another calibration than the sequence's camera.yaml.
+  ViewArgs view;             ///< The tracker's view of a lens image.
   std::string db;            ///< Keyframe database: relocalization after a loss, global initialization.
   bool global_init = false;  ///< Start with no pose: search the database (around the prior).
   double prior_sigma_m = 0;  ///< > 0: a simulated GPS-like prior from the ground truth with this 1-sigma.
@@ -116,7 +118,11 @@ void run(const TrackArgs& a) {
   const auto t_start = std::chrono::steady_clock::now();
   const Sequence seq = take(loadSequence(a.sequence));
   if (seq.images.empty()) throw Failure{fmt::format("{}: images.txt lists no image", a.sequence)};
-  const PinholeCamera camera = sequenceCamera(seq);
+  // The lens (the sequence's camera.yaml, or --camera) and the view the tracker works in.
+  Sequence lens_seq = seq;
+  if (a.camera.given()) lens_seq.camera = a.camera.getFull(seq.camera);
+  SequenceView view = sequenceView(lens_seq.camera, a.view.options(seq));
+  const PinholeCamera camera = view.camera;
   LocalizerOptions options;
   a.localizer.apply(options);
   options.calibrate_backend = a.calibrate;
@@ -126,7 +132,7 @@ void run(const TrackArgs& a) {
     throw Failure{fmt::format("--motion '{}': expected constant-velocity or last-pose", a.motion)};
   }
   // Inertial aiding from the sequence's IMU readings (body frame) and camera mounting.
-  setSequenceInertial(seq, !a.no_imu, options);
+  setSequenceInertial(lens_seq, !a.no_imu, options);
   const bool use_imu = options.inertial.enabled;
   if (a.start_frame >= seq.images.size()) {
     throw Failure{fmt::format("--start-frame {}: the sequence has {} images", a.start_frame, seq.images.size())};
@@ -143,6 +149,20 @@ void run(const TrackArgs& a) {
   std::shared_ptr<Accelerator> accelerator;
   if (context) accelerator = take(makeGpuAccelerator(context));
   auto localizer = take(Localizer::create(model, camera, options, accelerator));
+  std::string view_line;
+  if (view.front) {
+    const CameraFront& f = *view.front;
+    view_line = fmt::format("camera front: {} {} lens {}x{} -> {} view {}x{}, hfov {:.1f} deg{}", lens_seq.camera.model,
+                            f.lens().isIdealPinhole() ? "(ideal)" : "", f.lens().intrinsics.width,
+                            f.lens().intrinsics.height, viewKindName(f.options().kind), camera.width, camera.height,
+                            2.0 * std::atan(0.5 * camera.width / camera.fx) * 180.0 / M_PI,
+                            f.options().kind == ViewKind::kStabilised
+                                ? fmt::format(", axis {:.0f} deg below the horizon", f.options().pitch_deg)
+                                : "");
+    if (!a.overlay.dir.empty())
+      throw Failure{"--overlay draws on pinhole images; it is not available with a camera front"};
+    check(localizer->setCameraFront(std::move(view.front)));
+  }
   localizer->reset(T_init, v_init);
   std::string search_line;
   if (!a.db.empty()) {
@@ -189,6 +209,7 @@ void run(const TrackArgs& a) {
     std::printf("sequence %s: %zu of %zu images, %dx%d; model %zu triangles\n", seq.name.c_str(), total,
                 seq.images.size(), camera.width, camera.height, model.triangleCount());
     std::printf("%s\n", localizer->backendSummary().c_str());
+    if (!view_line.empty()) std::printf("%s\n", view_line.c_str());
     if (!search_line.empty()) std::printf("%s\n", search_line.c_str());
     std::printf("inertial aiding: %s\n", use_imu ? fmt::format("on ({} IMU readings)", seq.imu.size()).c_str()
                                                  : (seq.imu.empty() ? "off (no imu.csv)" : "off (--no-imu)"));
@@ -211,7 +232,8 @@ void run(const TrackArgs& a) {
       "t_ns,state,render_ms,reference_ms,live_ms,align_ms,total_ms,inlier_ratio,mean_residual_px,points,iterations,"
       "rerendered,visible_ratio,spread_ratio,chance_inlier_ratio,scale_px,keyframe_id,keyframe_age_frames,"
       "keyframe_adopted,visual_rejected,ekf_nis,inertial_sigma_m,verify_score,search_level,"
-      "search_probes,image_shift_px,prior_restarted,relocalization_candidates,search_radius_m,relocalization_ms"));
+      "search_probes,image_shift_px,prior_restarted,relocalization_candidates,search_radius_m,relocalization_ms,"
+      "front_ms,view_tilt_deg"));
   // The filter's output at the IMU rate (kEkf): camera pose, body velocity, 1-sigma figures.
   const std::string filter_path = (out_path.parent_path() / (out_path.stem().string() + "_filter.csv")).string();
   auto filter_out = take(PartialFileWriter::open(filter_path));
@@ -261,14 +283,15 @@ void run(const TrackArgs& a) {
       check(frames->appendLine(fmt::format(
           "{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{},{},{:."
           "4g},"
-          "{:.4g},{:.4f},{},{},{:.1f},{},{},{:.4g},{:.1f}",
+          "{:.4g},{:.4f},{},{},{:.1f},{},{},{:.4g},{:.1f},{:.3f},{:.2f}",
           entry.t_ns, trackingStateName(f.state), f.render_ms, f.reference_ms, f.live_ms, f.align_ms, f.total_ms,
           f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used, f.quality.iterations,
           f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio, f.quality.chance_inlier_ratio,
           f.quality.scale_px, f.keyframe_id, f.keyframe_age_frames, f.keyframe_adopted ? 1 : 0,
           f.visual_rejected ? 1 : 0, f.innovation, f.inertial_sigma_m, f.verify_score, f.search_level,
           f.motion_search_probes, f.image_shift_px, f.prior_restarted ? 1 : 0, f.relocalization_candidates,
-          f.search_radius_m, f.relocalization_ms)));
+          f.search_radius_m, f.relocalization_ms, f.front_ms,
+          Eigen::AngleAxisd(f.T_camera_view.linear()).angle() * 180.0 / M_PI)));
       for (const FilterOutput& o : localizer->takeFilterOutputs()) {
         const Eigen::Quaterniond q(o.T_world_camera.linear());
         const Eigen::Vector3d& t = o.T_world_camera.translation();
@@ -408,6 +431,8 @@ void addTrackOptions(CLI::App* cmd, const std::shared_ptr<TrackArgs>& args) {
   cmd->add_option("--frames-csv", args->frames_csv,
                   "Per-frame log (t_ns, state, stage *_ms, quality); default <out stem>_frames.csv");
   args->localizer.add(*cmd);
+  args->camera.add(*cmd);
+  args->view.add(*cmd);
   cmd->add_option("--motion", args->motion, "Pose prediction: constant-velocity | last-pose")->capture_default_str();
   cmd->add_option("--max-frames", args->max_frames, "Track only the first N images (0 = all)")->capture_default_str();
   cmd->add_option("--start-frame", args->start_frame,

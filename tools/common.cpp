@@ -50,14 +50,17 @@ Model ModelArgs::load() const {
 }
 
 void CameraArgs::add(CLI::App& app) {
-  app.add_option("--camera,-c", file, "Camera file (YAML/JSON with fx fy cx cy width height)");
+  app.add_option("--camera,-c", file,
+                 "Calibration file: vkloc camera.yaml, Kalibr camchain, EuRoC sensor.yaml, OpenCV, ROS camera_info, "
+                 "CamOdoCal, COLMAP cameras.txt, or flat fx fy cx cy width height");
+  app.add_option("--camera-name", select, "Camera of a multi-camera file (Kalibr cam1, COLMAP id): name or index");
   app.add_option("--intrinsics", intrinsics,
                  "Inline camera 'fx,fy,cx,cy,width,height' (default 525,525,319.5,239.5,640,480)");
 }
 
-PinholeCamera CameraArgs::get() const {
-  if (!file.empty() && !intrinsics.empty()) throw Failure{"give either --camera or --intrinsics, not both"};
-  if (!file.empty()) return take(loadCamera(file));
+namespace {
+
+PinholeCamera inlineIntrinsics(const std::string& intrinsics) {
   PinholeCamera cam;
   if (!intrinsics.empty()) {
     const std::vector<double> v = take(parseNumbers(intrinsics, "--intrinsics (fx,fy,cx,cy,width,height)", 6));
@@ -71,6 +74,77 @@ PinholeCamera CameraArgs::get() const {
   }
   check(validateCamera(cam));
   return cam;
+}
+
+}  // namespace
+
+SequenceCamera CameraArgs::getFull(const SequenceCamera& fallback) const {
+  if (!file.empty() && !intrinsics.empty()) throw Failure{"give either --camera or --intrinsics, not both"};
+  if (!file.empty()) return take(loadCalibration(file, select));
+  if (!select.empty()) throw Failure{"--camera-name needs --camera"};
+  SequenceCamera camera = fallback;
+  if (!intrinsics.empty()) {
+    camera = SequenceCamera{};
+    camera.T_body_camera = fallback.T_body_camera;
+    camera.intrinsics = inlineIntrinsics(intrinsics);
+  }
+  return camera;
+}
+
+PinholeCamera CameraArgs::get() const {
+  if (!file.empty()) {
+    const SequenceCamera full = getFull(SequenceCamera{});
+    const LensCamera lens = take(lensCamera(full));
+    if (!lens.isIdealPinhole()) {
+      throw Failure{fmt::format("{}: a {} lens{}; this verb takes an ideal pinhole camera", file, full.model,
+                                full.model == "pinhole" ? " with distortion" : "")};
+    }
+    return full.intrinsics;
+  }
+  return getFull(SequenceCamera{}).intrinsics;
+}
+
+void ViewArgs::add(CLI::App& app) {
+  app.add_option("--view", view,
+                 "Tracker view of a lens image: undistorted (fixed to the lens) | stabilised (EIS: roll and pitch "
+                 "compensated, axis --view-pitch below the horizon)")
+      ->check(CLI::IsMember({"undistorted", "stabilised", "stabilized"}))
+      ->capture_default_str();
+  app.add_option("--view-size", size, "View size 'WxH', pixels (default: the lens image's)");
+  app.add_option("--view-hfov", hfov_deg,
+                 "View's horizontal field of view, degrees (default: a pinhole lens's own, else 90)");
+  app.add_option("--view-pitch", pitch_deg, "Stabilised view: axis angle below the horizon, degrees (90 = down)")
+      ->capture_default_str();
+}
+
+ViewOptions ViewArgs::options(const Sequence& seq) const {
+  ViewOptions o;
+  o.kind = take(parseViewKind(view));
+  if (!size.empty()) {
+    int w = 0, h = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(size.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 || h < 1) {
+      throw Failure{fmt::format("--view-size '{}': expected WxH, e.g. 640x480", size)};
+    }
+    o.width = w;
+    o.height = h;
+  }
+  o.hfov_deg = hfov_deg;
+  o.pitch_deg = pitch_deg;
+  if (seq.gravity_world.norm() > 0) o.up_world = -seq.gravity_world.normalized();
+  return o;
+}
+
+SequenceView sequenceView(const SequenceCamera& camera, const ViewOptions& options) {
+  const LensCamera lens = take(lensCamera(camera));
+  SequenceView out;
+  if (lens.isIdealPinhole() && options.kind == ViewKind::kUndistorted && options.width == 0 && options.hfov_deg == 0) {
+    out.camera = lens.intrinsics;
+    return out;
+  }
+  out.front = take(CameraFront::create(lens, options));
+  out.camera = out.front->view();
+  return out;
 }
 
 void LocalizerArgs::add(CLI::App& app) {
@@ -244,15 +318,12 @@ size_t feedSequenceImu(const Sequence& seq, size_t next, int64_t t_ns, Localizer
 }
 
 PinholeCamera sequenceCamera(const Sequence& seq) {
-  if (seq.camera.model != "pinhole") {
-    throw Failure{fmt::format("{}/camera.yaml: camera model '{}' is not supported yet (pinhole only)", seq.directory,
-                              seq.camera.model)};
-  }
-  for (double k : seq.camera.distortion) {
-    if (k != 0.0) {
-      throw Failure{fmt::format("{}/camera.yaml: lens distortion is not supported yet; undistort the images first",
-                                seq.directory)};
-    }
+  const LensCamera lens = take(lensCamera(seq.camera));
+  if (!lens.isIdealPinhole()) {
+    throw Failure{
+        fmt::format("{}/camera.yaml: a {} lens{}: this verb takes pinhole images; vkloc track tracks it "
+                    "through an undistorted or stabilised view (--view)",
+                    seq.directory, seq.camera.model, seq.camera.model == "pinhole" ? " with distortion" : "")};
   }
   return seq.camera.intrinsics;
 }

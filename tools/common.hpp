@@ -12,6 +12,7 @@
 #include "vkloc/core/clock.hpp"
 #include "vkloc/core/pose.hpp"
 #include "vkloc/engine/gpu.hpp"
+#include "vkloc/io/calibration.hpp"
 #include "vkloc/localize/localizer.hpp"
 #include "vkloc/model/model.hpp"
 
@@ -46,13 +47,40 @@ struct ModelArgs {
   Model load() const;
 };
 
-/// Camera options: a file, or inline intrinsics, or the default 640x480.
+/// Camera options: a calibration file (loadCalibration: vkloc, Kalibr, EuRoC, OpenCV, ROS,
+/// CamOdoCal, COLMAP), or inline intrinsics, or the default 640x480.
 struct CameraArgs {
   std::string file;
+  std::string select;      ///< --camera-name: camera of a multi-camera file, by name or index.
   std::string intrinsics;  ///< "fx,fy,cx,cy,width,height"
   void add(CLI::App& app);
+  /// A pinhole camera; a lens with distortion is refused (verbs that render take only those).
   PinholeCamera get() const;
+  /// The whole calibration (lens model and mounting) from --camera, else `fallback` with
+  /// --intrinsics when given.
+  SequenceCamera getFull(const SequenceCamera& fallback) const;
+  bool given() const { return !file.empty() || !intrinsics.empty(); }
 };
+
+/// How a lens image becomes the tracker's pinhole view (CameraFront): --view, --view-size,
+/// --view-hfov, --view-pitch.
+struct ViewArgs {
+  std::string view = "undistorted";
+  std::string size;     ///< "WxH"; empty: the lens image's.
+  double hfov_deg = 0;  ///< 0: a pinhole lens keeps its intrinsics, another gets 90.
+  double pitch_deg = 45;
+  void add(CLI::App& app);
+  /// The options for a sequence (its gravity gives the world's up).
+  ViewOptions options(const Sequence& seq) const;
+};
+
+/// The tracker's camera for a sequence's lens: the view's intrinsics, and the camera front that
+/// makes the view (null for an ideal pinhole lens seen as it is).
+struct SequenceView {
+  PinholeCamera camera;
+  std::unique_ptr<CameraFront> front;
+};
+SequenceView sequenceView(const SequenceCamera& camera, const ViewOptions& options);
 
 /// Where and how the Localizer runs: --backend, --policy, --keyframes (vkloc track, vkloc demo).
 struct LocalizerArgs {
@@ -85,8 +113,8 @@ std::vector<std::string> writeRender(const std::string& dir, const std::string& 
 
 /// The sequence's model (file, or built-in demo placed by T_world_model); throws Failure.
 Model loadSequenceModel(const Sequence& seq);
-/// The sequence's camera for localization; throws Failure for a non-pinhole model or lens
-/// distortion (not supported yet).
+/// The sequence's camera when it is an ideal pinhole; throws Failure naming `vkloc track --view`
+/// for another lens.
 PinholeCamera sequenceCamera(const Sequence& seq);
 /// The sequence's initial pose (sequence.yaml, else ground truth at the first image; with
 /// start_frame > 0 the ground truth at that image), moved by `offset` = "dx,dy,dz,rx,ry,rz"

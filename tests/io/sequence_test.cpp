@@ -781,7 +781,7 @@ TEST(SequenceImport, EurocMalformedInputs) {
   expectLineError(importEuroc(root.string()), yaml, 2, "T_BS");
   ASSERT_TRUE(writeFile(yaml, "resolution: [752, 480]\nintrinsics: [458, 457, 367, abc]\n"));
   expectLineError(importEuroc(root.string()), yaml, 2);
-  ASSERT_TRUE(writeFile(yaml, "camera_model: omni\nresolution: [752, 480]\nintrinsics: [458, 457, 367, 248]\n"));
+  ASSERT_TRUE(writeFile(yaml, "camera_model: eucm\nresolution: [752, 480]\nintrinsics: [458, 457, 367, 248]\n"));
   auto omni = importEuroc(root.string());
   ASSERT_FALSE(omni.ok());
   EXPECT_EQ(omni.error().code, ErrorCode::kUnsupported);

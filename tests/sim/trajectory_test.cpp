@@ -51,7 +51,9 @@ SplineTrajectory makeKind(TrajectoryKind kind, double duration_s, uint64_t seed,
   o.duration_s = duration_s;
   o.seed = seed;
   o.T_body_camera = T_body_camera;
-  const Aabb& bounds = (kind == TrajectoryKind::kDroneFlight || kind == TrajectoryKind::kOrbit) ? kCity : kRoom;
+  const bool outdoor =
+      kind == TrajectoryKind::kDroneFlight || kind == TrajectoryKind::kDroneAgile || kind == TrajectoryKind::kOrbit;
+  const Aabb& bounds = outdoor ? kCity : kRoom;
   auto t = makeTrajectory(o, bounds);
   EXPECT_TRUE(t.ok()) << (t.ok() ? "" : t.error().message);
   return t.ok() ? *t : SplineTrajectory{};
@@ -80,8 +82,8 @@ std::vector<Pose> randomControls(size_t n, uint64_t seed) {
   return poses;
 }
 
-const TrajectoryKind kAllKinds[] = {TrajectoryKind::kDroneFlight, TrajectoryKind::kHandheld,
-                                    TrajectoryKind::kAggressive, TrajectoryKind::kOrbit};
+const TrajectoryKind kAllKinds[] = {TrajectoryKind::kDroneFlight, TrajectoryKind::kDroneAgile,
+                                    TrajectoryKind::kHandheld, TrajectoryKind::kAggressive, TrajectoryKind::kOrbit};
 
 // ------------------------------------------------------------------------------------------------
 // (1) Exact derivatives against central finite differences of evaluate().
@@ -502,6 +504,26 @@ TEST(Generators, OrbitCirclesTheCentreLookingAtIt) {
   }
   EXPECT_LT((r_max - r_min) / r_max, 1e-6);
   EXPECT_LT(z_max - z_min, 1e-9);
+}
+
+TEST(Generators, AgileDroneRollsAndPitchesFast) {
+  // The agile drone's airframe tilts by up to ~25 deg at up to ~3 rad/s; the plain drone's does not.
+  const SplineTrajectory agile = makeKind(TrajectoryKind::kDroneAgile, 20.0, 3, mounting());
+  const SplineTrajectory calm = makeKind(TrajectoryKind::kDroneFlight, 20.0, 3, mounting());
+  double tilt_agile = 0, tilt_calm = 0, rate_agile = 0;
+  for (int64_t t = agile.startNs(); t <= agile.endNs(); t += 20000000) {
+    const TrajectoryState a = agile.evaluate(t), c = calm.evaluate(t);
+    // The camera's tilt from its nominal 45 deg down, degrees.
+    const Pose Ta = a.T_world_body * mounting(), Tc = c.T_world_body * mounting();
+    tilt_agile = std::max(tilt_agile, std::abs(std::asin(-Ta.linear()(2, 2)) / kDeg - 45.0));
+    tilt_calm = std::max(tilt_calm, std::abs(std::asin(-Tc.linear()(2, 2)) / kDeg - 45.0));
+    rate_agile = std::max(rate_agile, a.omega_body.norm());
+  }
+  EXPECT_GT(tilt_agile, 12.0);
+  EXPECT_LT(tilt_agile, 40.0);
+  EXPECT_LT(tilt_calm, 1.0);
+  EXPECT_GT(rate_agile, 1.5);
+  EXPECT_LT(rate_agile, 5.0);
 }
 
 TEST(Generators, DeterministicInSeedAndValidated) {

@@ -4,6 +4,8 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 
@@ -21,16 +23,88 @@ bool distortionCountOk(const std::string& model, size_t n) {
   if (model == "pinhole") return n == 0 || n == 4 || n == 5;
   if (model == "kannala_brandt") return n == 0 || n == 4;
   if (model == "mei") return n == 0 || n == 4;
+  if (model == "double_sphere") return n == 0;
   return false;
 }
 
-bool knownModel(const std::string& model) { return model == "pinhole" || model == "mei" || model == "kannala_brandt"; }
+constexpr const char* kDistortionCounts = "pinhole: 0, 4 or 5; kannala_brandt and mei: 0 or 4; double_sphere: 0";
+
+bool knownModel(const std::string& model) {
+  return model == "pinhole" || model == "mei" || model == "kannala_brandt" || model == "double_sphere";
+}
+
+/// The camera.yaml key that holds the parameter a validateCamera / validateLensCamera message
+/// starts with ("camera: fx = ...", "k1 = nan: ...").
+std::string keyOfParameter(std::string_view message) {
+  if (message.rfind("camera: ", 0) == 0) message.remove_prefix(8);
+  if (message.find("distortion folds") != std::string_view::npos) return "distortion";
+  size_t n = 0;
+  while (n < message.size() && (std::isalnum(static_cast<unsigned char>(message[n])) || message[n] == '_')) ++n;
+  const std::string name(message.substr(0, n));
+  for (const char* key : {"fx", "fy", "cx", "cy", "width", "height", "xi", "alpha", "max_angle_deg", "model"}) {
+    if (name == key) return name;
+  }
+  if (name == "k1" || name == "k2" || name == "k3" || name == "k4" || name == "p1" || name == "p2" ||
+      name == "distortion") {
+    return "distortion";
+  }
+  return {};
+}
 
 }  // namespace
 
+Result<LensCamera> lensCamera(const SequenceCamera& camera) {
+  auto model = parseLensModel(camera.model);
+  if (!model.ok()) return makeError(ErrorCode::kInvalidArgument, fmt::format("model: {}", model.error().message));
+  LensCamera lens;
+  lens.model = *model;
+  lens.intrinsics = camera.intrinsics;
+  if (!distortionCountOk(camera.model, camera.distortion.size())) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("distortion: {} coefficients do not fit model '{}' ({})", camera.distortion.size(),
+                                 camera.model, kDistortionCounts));
+  }
+  std::copy(camera.distortion.begin(), camera.distortion.end(), lens.k.begin());
+  lens.xi = camera.xi;
+  lens.alpha = camera.alpha;
+  lens.max_angle_deg = camera.max_angle_deg;
+  if (const Status valid = validateLensCamera(lens); !valid.ok())
+    return makeError(ErrorCode::kInvalidArgument, valid.error().message);
+  return lens;
+}
+
+SequenceCamera sequenceCamera(const LensCamera& camera, const Pose& T_body_camera) {
+  SequenceCamera out;
+  out.model = lensModelName(camera.model);
+  out.intrinsics = camera.intrinsics;
+  size_t n = 0;
+  switch (camera.model) {
+    case LensModel::kPinhole:
+      n = camera.k[4] != 0.0 ? 5 : 4;
+      break;
+    case LensModel::kKannalaBrandt:
+    case LensModel::kMei:
+      n = 4;
+      break;
+    case LensModel::kDoubleSphere:
+      n = 0;
+      break;
+  }
+  if (std::any_of(camera.k.begin(), camera.k.begin() + static_cast<std::ptrdiff_t>(n),
+                  [](double k) { return k != 0.0; })) {
+    out.distortion.assign(camera.k.begin(), camera.k.begin() + static_cast<std::ptrdiff_t>(n));
+  }
+  out.xi = camera.model == LensModel::kMei || camera.model == LensModel::kDoubleSphere ? camera.xi : 0.0;
+  out.alpha = camera.model == LensModel::kDoubleSphere ? camera.alpha : 0.0;
+  out.max_angle_deg = camera.max_angle_deg;
+  out.T_body_camera = T_body_camera;
+  return out;
+}
+
 Status io_detail::validateSequenceCamera(const SequenceCamera& camera, const std::string& what) {
   if (!knownModel(camera.model)) {
-    return invalid(fmt::format("{}: unknown camera model '{}' (pinhole, mei, kannala_brandt)", what, camera.model));
+    return invalid(
+        fmt::format("{}: unknown camera model '{}' (pinhole, mei, kannala_brandt, double_sphere)", what, camera.model));
   }
   const Status valid = validateCamera(camera.intrinsics);
   if (!valid.ok()) return invalid(fmt::format("{}: {}", what, valid.error().message));
@@ -42,6 +116,9 @@ Status io_detail::validateSequenceCamera(const SequenceCamera& camera, const std
     if (!std::isfinite(d)) return invalid(fmt::format("{}: non-finite distortion coefficient", what));
   }
   if (!std::isfinite(camera.xi)) return invalid(fmt::format("{}: non-finite xi", what));
+  if (!std::isfinite(camera.alpha)) return invalid(fmt::format("{}: non-finite alpha", what));
+  if (!std::isfinite(camera.max_angle_deg)) return invalid(fmt::format("{}: non-finite max_angle_deg", what));
+  if (auto lens = lensCamera(camera); !lens.ok()) return invalid(fmt::format("{}: {}", what, lens.error().message));
   if (!finitePose(camera.T_body_camera))
     return invalid(fmt::format("{}: T_body_camera is not a rigid transform", what));
   return Status::success();
@@ -57,6 +134,8 @@ std::string io_detail::cameraYaml(const SequenceCamera& camera) {
   out += fmt::format("width: {}\nheight: {}\n", k.width, k.height);
   out += fmt::format("distortion: {}\n", numberList(camera.distortion.data(), camera.distortion.size()));
   out += fmt::format("xi: {}\n", num(camera.xi));
+  if (camera.model == "double_sphere") out += fmt::format("alpha: {}\n", num(camera.alpha));
+  if (camera.max_angle_deg != 0.0) out += fmt::format("max_angle_deg: {}\n", num(camera.max_angle_deg));
   out += fmt::format("T_body_camera: {}\n", poseList16(camera.T_body_camera));
   return out;
 }
@@ -64,11 +143,8 @@ std::string io_detail::cameraYaml(const SequenceCamera& camera) {
 // -----------------------------------------------------------------------------------------------
 // camera.yaml
 
-Result<SequenceCamera> loadSequenceCamera(const std::string& path) {
-  auto loaded = loadYaml(path, "camera file");
-  if (!loaded.ok()) return loaded.error();
+Result<SequenceCamera> io_detail::readSequenceCamera(const std::string& path, const YAML::Node& root) {
   try {
-    const YAML::Node& root = *loaded;
     SequenceCamera camera;
     if (const YAML::Node m = root["model"]; m) {
       auto model = yamlString(path, m, "model");
@@ -76,8 +152,9 @@ Result<SequenceCamera> loadSequenceCamera(const std::string& path) {
       camera.model = *model;
       if (!knownModel(camera.model)) {
         return makeError(ErrorCode::kUnsupported,
-                         fmt::format("{}:{}: camera model {} is not supported (pinhole, mei, kannala_brandt)", path,
-                                     yamlLine(m), shown(camera.model)));
+                         fmt::format("{}:{}: camera model {} is not supported (pinhole, mei, kannala_brandt, "
+                                     "double_sphere)",
+                                     path, yamlLine(m), shown(camera.model)));
       }
     }
     PinholeCamera& k = camera.intrinsics;
@@ -88,14 +165,14 @@ Result<SequenceCamera> loadSequenceCamera(const std::string& path) {
     for (const DoubleField& f :
          {DoubleField{"fx", &k.fx}, DoubleField{"fy", &k.fy}, DoubleField{"cx", &k.cx}, DoubleField{"cy", &k.cy}}) {
       const YAML::Node n = root[f.key];
-      if (!n) return makeError(ErrorCode::kMalformedInput, fmt::format("{}: missing key '{}'", path, f.key));
+      if (!n) return makeError(ErrorCode::kMalformedInput, fmt::format("{}: field '{}': missing", path, f.key));
       auto v = yamlDouble(path, n, f.key);
       if (!v.ok()) return v.error();
       *f.out = *v;
     }
     for (const char* key : {"width", "height"}) {
       const YAML::Node n = root[key];
-      if (!n) return makeError(ErrorCode::kMalformedInput, fmt::format("{}: missing key '{}'", path, key));
+      if (!n) return makeError(ErrorCode::kMalformedInput, fmt::format("{}: field '{}': missing", path, key));
       auto v = yamlInt(path, n, key);
       if (!v.ok()) return v.error();
       (std::string_view(key) == "width" ? k.width : k.height) = *v;
@@ -126,25 +203,45 @@ Result<SequenceCamera> loadSequenceCamera(const std::string& path) {
       camera.distortion = *d;
       if (!distortionCountOk(camera.model, camera.distortion.size())) {
         return lineError(path, yamlLine(n),
-                         fmt::format("{} distortion coefficients do not fit model '{}' (pinhole: 0, 4 or 5; mei and "
-                                     "kannala_brandt: 4)",
-                                     camera.distortion.size(), camera.model));
+                         fmt::format("{} distortion coefficients do not fit model '{}' ({})", camera.distortion.size(),
+                                     camera.model, kDistortionCounts));
       }
     }
-    if (const YAML::Node n = root["xi"]; n) {
-      auto xi = yamlDouble(path, n, "xi");
-      if (!xi.ok()) return xi.error();
-      camera.xi = *xi;
+    struct OptionalField {
+      const char* key;
+      double* out;
+    };
+    for (const OptionalField& f : {OptionalField{"xi", &camera.xi}, OptionalField{"alpha", &camera.alpha},
+                                   OptionalField{"max_angle_deg", &camera.max_angle_deg}}) {
+      if (const YAML::Node n = root[f.key]; n) {
+        auto v = yamlDouble(path, n, f.key);
+        if (!v.ok()) return v.error();
+        *f.out = *v;
+      }
     }
     if (const YAML::Node n = root["T_body_camera"]; n) {
       auto T = yamlPose(path, n, "T_body_camera");
       if (!T.ok()) return T.error();
       camera.T_body_camera = *T;
     }
+    if (auto lens = lensCamera(camera); !lens.ok()) {
+      std::string_view message = lens.error().message;
+      if (message.rfind("camera: ", 0) == 0) message.remove_prefix(8);
+      const std::string key = keyOfParameter(message);
+      const YAML::Node n = key.empty() ? YAML::Node() : root[key];
+      return lineError(path, n ? yamlLine(n) : 1,
+                       key.empty() ? std::string(message) : fmt::format("field '{}': {}", key, message));
+    }
     return camera;
   } catch (const YAML::Exception& e) {
     return lineError(path, static_cast<size_t>(e.mark.line + 1), fmt::format("invalid camera file: {}", e.msg));
   }
+}
+
+Result<SequenceCamera> loadSequenceCamera(const std::string& path) {
+  auto loaded = loadYaml(path, "camera file");
+  if (!loaded.ok()) return loaded.error();
+  return readSequenceCamera(path, *loaded);
 }
 
 Status saveSequenceCamera(const SequenceCamera& camera, const std::string& path) {

@@ -3,7 +3,6 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Geometry>
-#include <Eigen/SVD>
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -13,6 +12,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "io/io_internal.hpp"
 #include "vkloc/core/text.hpp"
 #include "vkloc/io/import.hpp"
 
@@ -100,19 +100,12 @@ SequenceCamera tumCamera(double fx, double fy, double cx, double cy, std::vector
 }
 
 // -----------------------------------------------------------------------------------------------
-// EuRoC sensor.yaml
+// EuRoC imu0/sensor.yaml (cam0/sensor.yaml: io_detail::loadKalibrSensorCamera)
 
 // These throw YAML::Exception (with the line) on bad values; callers catch it.
 double yamlNumber(const YAML::Node& node, const char* key) {
   const double v = node.as<double>();
   if (!std::isfinite(v)) throw YAML::Exception(node.Mark(), fmt::format("'{}' is not finite", key));
-  return v;
-}
-
-std::vector<double> yamlNumbers(const YAML::Node& node, const char* key) {
-  if (!node.IsSequence()) throw YAML::Exception(node.Mark(), fmt::format("'{}' must be a list of numbers", key));
-  std::vector<double> v;
-  for (size_t i = 0; i < node.size(); ++i) v.push_back(yamlNumber(node[i], key));
   return v;
 }
 
@@ -129,76 +122,6 @@ Result<YAML::Node> loadYamlFile(const std::string& path) {
   } catch (const YAML::Exception& e) {
     return lineError(path, static_cast<size_t>(e.mark.line + 1), fmt::format("not valid YAML: {}", e.msg));
   }
-}
-
-Result<SequenceCamera> loadEurocCamera(const std::string& path) {
-  auto loaded = loadYamlFile(path);
-  if (!loaded.ok()) return loaded.error();
-  const YAML::Node& root = *loaded;
-  SequenceCamera camera;
-  try {
-    const std::string camera_model = root["camera_model"] ? root["camera_model"].as<std::string>() : "pinhole";
-    const std::string distortion_model =
-        root["distortion_model"] ? root["distortion_model"].as<std::string>() : "radial-tangential";
-    if (camera_model != "pinhole") {
-      return makeError(ErrorCode::kUnsupported,
-                       fmt::format("{}: camera_model '{}' is not supported (pinhole)", path, camera_model));
-    }
-    if (distortion_model == "radial-tangential" || distortion_model == "radtan" || distortion_model == "none") {
-      camera.model = "pinhole";
-    } else if (distortion_model == "equidistant") {
-      camera.model = "kannala_brandt";
-    } else {
-      return makeError(ErrorCode::kUnsupported,
-                       fmt::format("{}: distortion_model '{}' is not supported (radial-tangential, equidistant)", path,
-                                   distortion_model));
-    }
-    const YAML::Node intrinsics = root["intrinsics"];
-    const YAML::Node resolution = root["resolution"];
-    if (!intrinsics || !resolution) {
-      return makeError(ErrorCode::kMalformedInput, fmt::format("{}: needs 'intrinsics' and 'resolution'", path));
-    }
-    const std::vector<double> k = yamlNumbers(intrinsics, "intrinsics");
-    if (k.size() != 4) return lineError(path, intrinsics.Mark().line + 1, "'intrinsics' needs [fu, fv, cu, cv]");
-    if (!resolution.IsSequence() || resolution.size() != 2) {
-      return lineError(path, resolution.Mark().line + 1, "'resolution' needs [width, height]");
-    }
-    camera.intrinsics = PinholeCamera{k[0], k[1], k[2], k[3], resolution[0].as<int>(), resolution[1].as<int>()};
-    if (const Status valid = validateCamera(camera.intrinsics); !valid.ok()) {
-      return lineError(path, intrinsics.Mark().line + 1, valid.error().message);
-    }
-    if (const YAML::Node d = root["distortion_coefficients"]; d && distortion_model != "none") {
-      camera.distortion = yamlNumbers(d, "distortion_coefficients");
-      const size_t n = camera.distortion.size();
-      if (!(n == 0 || n == 4 || (n == 5 && camera.model == "pinhole"))) {
-        return lineError(path, d.Mark().line + 1,
-                         fmt::format("{} distortion coefficients do not fit '{}'", n, distortion_model));
-      }
-    }
-    if (const YAML::Node t = root["T_BS"]; t) {
-      const YAML::Node data = t.IsMap() ? t["data"] : t;
-      if (!data) return lineError(path, t.Mark().line + 1, "'T_BS' needs 'data' with 16 numbers");
-      const std::vector<double> m = yamlNumbers(data, "T_BS");
-      if (m.size() != 16) {
-        return lineError(path, data.Mark().line + 1, fmt::format("'T_BS' needs 16 numbers, got {}", m.size()));
-      }
-      Eigen::Matrix4d M;
-      for (int i = 0; i < 16; ++i) M(i / 4, i % 4) = m[static_cast<size_t>(i)];
-      const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
-      if ((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-3 || R.determinant() <= 0 ||
-          (M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9) {
-        return lineError(path, data.Mark().line + 1, "'T_BS' is not a rigid transform");
-      }
-      // Project the printed rotation onto SO(3): R = U V^T.
-      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      camera.T_body_camera = Pose::Identity();
-      camera.T_body_camera.linear() = svd.matrixU() * svd.matrixV().transpose();
-      camera.T_body_camera.translation() = M.topRightCorner<3, 1>();
-    }
-  } catch (const YAML::Exception& e) {
-    return lineError(path, static_cast<size_t>(e.mark.line + 1), e.msg);
-  }
-  return camera;
 }
 
 Result<ImuNoise> loadEurocImuNoise(const std::string& path) {
@@ -350,7 +273,9 @@ Result<Sequence> importEuroc(const std::string& euroc_directory, const std::stri
   Sequence seq;
   seq.name = (mav0 == dir ? dir.parent_path() : dir).filename().string();
   seq.model = model;
-  auto camera = loadEurocCamera((mav0 / "cam0" / "sensor.yaml").string());
+  // Kalibr-style sensor.yaml: pinhole, omni (Mei) or ds (double sphere); radtan, or equidistant
+  // (Kannala-Brandt); T_BS = T_body_camera. Shared with loadCalibration.
+  auto camera = io_detail::loadKalibrSensorCamera((mav0 / "cam0" / "sensor.yaml").string());
   if (!camera.ok()) return camera.error();
   seq.camera = std::move(*camera);
   auto images = loadEurocImages((mav0 / "cam0" / "data.csv").string(), mav0 / "cam0" / "data");

@@ -132,5 +132,11 @@ inline std::string numberList(const double* v, size_t n) {
 Status validateSequenceCamera(const SequenceCamera& camera, const std::string& what);
 /// camera.yaml text of a validated camera.
 std::string cameraYaml(const SequenceCamera& camera);
+/// Reads camera.yaml keys from a parsed mapping (errors "path:line: ..."); loadSequenceCamera
+/// and loadCalibration share it.
+Result<SequenceCamera> readSequenceCamera(const std::string& path, const YAML::Node& root);
+/// Reads a Kalibr / EuRoC single-camera sensor.yaml (camera_model, intrinsics, distortion_model,
+/// distortion_coefficients, resolution, T_BS); the EuRoC importer and loadCalibration share it.
+Result<SequenceCamera> loadKalibrSensorCamera(const std::string& path);
 
 }  // namespace vkloc::io_detail

@@ -170,6 +170,12 @@ struct Localizer::Impl {
   PinholeCamera camera;
   std::unique_ptr<KeyframeManager> keyframes;
   std::unique_ptr<MotionPrior> motion;
+  /// The camera front (setCameraFront) and the prior's view wrapper (inside `motion`), the view
+  /// image of the frame and the last camera pose reported (for the next frame's view).
+  std::unique_ptr<CameraFront> front;
+  ViewPrior* view_prior = nullptr;
+  ImageU8 view_image;
+  std::optional<Pose> last_camera_pose;
   Initializer initializer{InitializerOptions{}};
   /// The backends frames may be tracked on: both only until the first-frame calibration.
   std::unique_ptr<EdgeTrackingBackend> cpu_backend;
@@ -805,6 +811,14 @@ void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vec
   m.last_tracked_t_ns.reset();
   m.last_imu.reset();
   m.last_relocalized_t_ns.reset();
+  m.last_camera_pose.reset();
+  if (m.front && isValidPose(T_world_camera)) {
+    // The motion prior works on the camera; its interface on the view of the pose given.
+    m.view_prior->setView(m.front->viewExtrinsic(T_world_camera));
+    m.motion->reset(m.view_prior->toView(T_world_camera), v_world_camera);
+    m.last_camera_pose = T_world_camera;
+    return;
+  }
   m.motion->reset(T_world_camera, v_world_camera);  // timestamps may start over
 }
 
@@ -869,8 +883,73 @@ std::string Localizer::backendSummary() const {
                      m.worker() ? "keyframes on a worker thread" : "keyframes made synchronously");
 }
 
-Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& gray,
+Status Localizer::setCameraFront(std::unique_ptr<CameraFront> front) {
+  Impl& m = *impl_;
+  if (front) {
+    const PinholeCamera& v = front->view();
+    const PinholeCamera& c = m.camera;
+    if (v.width != c.width || v.height != c.height || std::abs(v.fx - c.fx) > 1e-9 * c.fx ||
+        std::abs(v.fy - c.fy) > 1e-9 * c.fy || std::abs(v.cx - c.cx) > 1e-9 || std::abs(v.cy - c.cy) > 1e-9) {
+      return makeError(ErrorCode::kInvalidArgument,
+                       fmt::format("Localizer: the camera front's view ({}x{}, fx {:.6g}) is not the camera the "
+                                   "Localizer was made for ({}x{}, fx {:.6g})",
+                                   v.width, v.height, v.fx, c.width, c.height, c.fx));
+    }
+    if (!m.view_prior) {
+      auto wrapped = std::make_unique<ViewPrior>(std::move(m.motion));
+      m.view_prior = wrapped.get();
+      m.motion = std::move(wrapped);
+    }
+  }
+  if (m.view_prior) m.view_prior->setView(Pose::Identity());
+  m.front = std::move(front);
+  return Status::success();
+}
+
+const CameraFront* Localizer::cameraFront() const { return impl_->front.get(); }
+
+Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& image,
                                                const std::optional<Pose>& T_world_camera_guess) {
+  Impl& m = *impl_;
+  if (!m.front) return localizeView(t_ns, image, T_world_camera_guess);
+  const auto t_start = SteadyClock::now();
+  if (T_world_camera_guess && !isValidPose(*T_world_camera_guess)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: the pose guess is not a finite rigid transform");
+  }
+  // The view of this frame (eq. 8): stabilised at the camera's attitude as the guess, the prior's
+  // prediction or the last pose has it (only the view's choice depends on it: the extrinsic
+  // used below is the exact one of the image made).
+  Pose T_camera_view = Pose::Identity();
+  if (m.front->options().kind == ViewKind::kStabilised) {
+    std::optional<Pose> T_world_camera = T_world_camera_guess;
+    if (!T_world_camera) {
+      if (std::optional<MotionPrediction> p = m.view_prior->cameraPrior().predict(t_ns))
+        T_world_camera = p->T_world_camera;
+    }
+    if (!T_world_camera) T_world_camera = m.last_camera_pose;
+    if (T_world_camera) T_camera_view = m.front->viewExtrinsic(*T_world_camera);
+  }
+  m.view_prior->setView(T_camera_view);
+  VKLOC_TRY_STATUS(m.front->remap(image, T_camera_view.linear(), m.view_image));
+  const double front_ms = msSince(t_start);
+  std::optional<Pose> guess_view;
+  if (T_world_camera_guess) guess_view = *T_world_camera_guess * T_camera_view;
+  Result<LocalizationResult> result = localizeView(t_ns, m.view_image, guess_view);
+  if (!result.ok()) return result;
+  LocalizationResult out = std::move(result).value();
+  out.T_camera_view = T_camera_view;
+  out.T_world_camera = m.view_prior->toCamera(out.T_world_camera);
+  out.covariance = m.view_prior->covarianceToCamera(out.covariance);
+  out.front_ms = front_ms;
+  out.total_ms += front_ms;
+  if (out.state != TrackingState::kLost && out.state != TrackingState::kInitializing) {
+    m.last_camera_pose = out.T_world_camera;
+  }
+  return out;
+}
+
+Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& gray,
+                                                   const std::optional<Pose>& T_world_camera_guess) {
   const auto t_start = SteadyClock::now();
   Impl& m = *impl_;
   if (gray.channels != 1 || gray.width != m.camera.width || gray.height != m.camera.height ||

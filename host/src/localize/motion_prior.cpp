@@ -291,4 +291,66 @@ std::vector<FilterOutput> EkfPrior::takeOutputs() {
   return out;
 }
 
+// --- ViewPrior ----------------------------------------------------------------------------------
+
+// T_world_camera expSE3(xi_c) T_camera_view = T_world_view expSE3(Ad(T_view_camera) xi_c).
+Matrix6d ViewPrior::covarianceToView(const Matrix6d& covariance_camera) const {
+  const Matrix6d Ad = adjointSE3(T_camera_view_.inverse());
+  return Ad * covariance_camera * Ad.transpose();
+}
+
+Matrix6d ViewPrior::covarianceToCamera(const Matrix6d& covariance_view) const {
+  const Matrix6d Ad = adjointSE3(T_camera_view_);
+  return Ad * covariance_view * Ad.transpose();
+}
+
+MotionPrediction ViewPrior::toView(MotionPrediction p) const {
+  p.T_world_camera = toView(p.T_world_camera);
+  p.covariance = covarianceToView(p.covariance);
+  return p;
+}
+
+std::optional<MotionPrediction> ViewPrior::predict(int64_t t_ns) const {
+  std::optional<MotionPrediction> p = prior_->predict(t_ns);
+  if (p) p = toView(*p);
+  return p;
+}
+
+bool ViewPrior::consistent(const MotionPrediction& prediction, const Pose& T_world_view, const Matrix6d& covariance,
+                           double scene_depth_m) const {
+  MotionPrediction p = prediction;
+  p.T_world_camera = toCamera(p.T_world_camera);
+  p.covariance = covarianceToCamera(p.covariance);
+  return prior_->consistent(p, toCamera(T_world_view), covarianceToCamera(covariance), scene_depth_m);
+}
+
+void ViewPrior::addVisualPose(int64_t t_ns, const Pose& T_world_view, const Matrix6d& covariance) {
+  prior_->addVisualPose(t_ns, toCamera(T_world_view), covarianceToCamera(covariance));
+}
+
+std::optional<BridgedPose> ViewPrior::bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
+                                             const Pose& guess) {
+  std::optional<MotionPrediction> p = prediction;
+  if (p) {
+    p->T_world_camera = toCamera(p->T_world_camera);
+    p->covariance = covarianceToCamera(p->covariance);
+  }
+  std::optional<BridgedPose> b = prior_->bridge(t_ns, p, toCamera(guess));
+  if (b) {
+    b->T_world_camera = toView(b->T_world_camera);
+    b->covariance = covarianceToView(b->covariance);
+  }
+  return b;
+}
+
+void ViewPrior::reset(const std::optional<Pose>& T_world_view, const std::optional<Eigen::Vector3d>& v_world) {
+  prior_->reset(T_world_view ? std::optional<Pose>(toCamera(*T_world_view)) : std::nullopt, v_world);
+}
+
+std::optional<Pose> ViewPrior::lastPose() const {
+  std::optional<Pose> p = prior_->lastPose();
+  if (p) p = toView(*p);
+  return p;
+}
+
 }  // namespace vkloc

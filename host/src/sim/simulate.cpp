@@ -72,9 +72,7 @@ Status validateOptions(const SimulationOptions& o) {
     return bad("colour jitter gain and offset must be in [0, 1)");
   if (o.jpeg && (o.jpeg_quality < 1 || o.jpeg_quality > 100))
     return bad(fmt::format("JPEG quality {} is outside 1..100", o.jpeg_quality));
-  if (o.camera.model != "pinhole" || !o.camera.distortion.empty())
-    return bad("only undistorted pinhole cameras can be simulated");
-  VKLOC_TRY_STATUS(validateCamera(o.camera.intrinsics));
+  if (Result<LensCamera> lens = lensCamera(o.camera); !lens.ok()) return bad(lens.error().message);
   if (!isValidPose(o.camera.T_body_camera)) return bad("T_body_camera is not a valid rigid transform");
   const DamageOptions& d = o.damage;
   if (!(d.simplify_ratio > 0.0 && d.simplify_ratio <= 1.0))
@@ -93,7 +91,7 @@ Pose defaultBodyCamera(TrajectoryKind kind) {
   // Body: x forward, y left, z up. Columns of R_body_camera are the camera axes in the body.
   Pose T = Pose::Identity();
   Eigen::Matrix3d R;
-  if (kind == TrajectoryKind::kDroneFlight) {
+  if (kind == TrajectoryKind::kDroneFlight || kind == TrajectoryKind::kDroneAgile) {
     const double c = std::cos(kPi / 4), s = std::sin(kPi / 4);
     // Camera z = forward and 45 deg down, x = right (-y), y = z x x (down and back).
     R.col(2) = Eigen::Vector3d(c, 0, -s);
@@ -108,6 +106,25 @@ Pose defaultBodyCamera(TrajectoryKind kind) {
   }
   T.linear() = R;
   return T;
+}
+
+Result<SequenceCamera> scenarioCamera(const std::string& lens, TrajectoryKind kind) {
+  SequenceCamera camera;
+  camera.T_body_camera = defaultBodyCamera(kind);
+  camera.intrinsics = PinholeCamera{500.0, 500.0, 319.5, 239.5, 640, 480};
+  if (lens == "pinhole") return camera;
+  if (lens == "radtan") {
+    camera.distortion = {-0.28, 0.074, 2e-4, 1.8e-5, 0.0};
+    return camera;
+  }
+  if (lens == "fisheye") {
+    camera.model = "kannala_brandt";
+    camera.intrinsics = PinholeCamera{200.0, 200.0, 399.5, 399.5, 800, 800};
+    camera.distortion = {0.02, -0.005, 0.001, -0.0001};
+    camera.max_angle_deg = 105.0;
+    return camera;
+  }
+  return makeError(ErrorCode::kNotFound, fmt::format("unknown lens '{}'; available: pinhole, radtan, fisheye", lens));
 }
 
 Result<SimulationOptions> scenarioOptions(const std::string& scene, const std::string& difficulty, uint64_t seed,
@@ -156,9 +173,30 @@ Result<Model> scenarioModel(const std::string& scene) {
   return makeDemoModel(scene, options);
 }
 
+namespace {
+
+/// One render in linear RGB, lit and with the sky painted.
+Result<ImageF32> renderLinear(Renderer& renderer, const PinholeCamera& camera, const Pose& T_world_camera,
+                              const RenderSettings& settings, const AppearanceOptions& a, const ShadowMap* map) {
+  auto rendered = renderer.render(camera, T_world_camera, settings);
+  if (!rendered.ok()) return rendered.error();
+  ImageF32 linear = decodeRender(rendered->rgba);
+  if (a.lighting.enabled && map != nullptr) applyLighting(linear, *rendered, camera, T_world_camera, *map, a.lighting);
+  if (a.sky) {
+    for (size_t i = 0; i < rendered->depth.data.size(); ++i) {
+      if (rendered->depth.data[i] != kBackgroundDepth) continue;
+      for (int c = 0; c < 3; ++c) linear.data[3 * i + c] = static_cast<float>((*a.sky)[c]);
+    }
+  }
+  return linear;
+}
+
+}  // namespace
+
 Result<ImageU8> simulateFrame(Renderer& renderer, const SplineTrajectory& trajectory, const Pose& T_body_camera,
                               const PinholeCamera& camera, int64_t t_ns, const AppearanceOptions& a,
-                              const ShadowMap* map, const RenderSettings& base_settings, uint64_t noise_seed) {
+                              const ShadowMap* map, const RenderSettings& base_settings, uint64_t noise_seed,
+                              const LensRig* rig) {
   const bool lighting = a.lighting.enabled && map != nullptr;
   RenderSettings settings = base_settings;
   settings.outputs = kRenderColor | kRenderDepth | (lighting ? kRenderNormals : 0u);
@@ -169,15 +207,19 @@ Result<ImageU8> simulateFrame(Renderer& renderer, const SplineTrajectory& trajec
     const double offset_s = a.exposure_time_s * ((k + 0.5) / n - 0.5);
     const int64_t t_k = t_ns + std::llround(offset_s * 1e9);
     const Pose T_world_camera = trajectory.evaluate(t_k).T_world_body * T_body_camera;
-    auto rendered = renderer.render(camera, T_world_camera, settings);
-    if (!rendered.ok()) return rendered.error();
-    ImageF32 linear = decodeRender(rendered->rgba);
-    if (lighting) applyLighting(linear, *rendered, camera, T_world_camera, *map, a.lighting);
-    if (a.sky) {
-      for (size_t i = 0; i < rendered->depth.data.size(); ++i) {
-        if (rendered->depth.data[i] != kBackgroundDepth) continue;
-        for (int c = 0; c < 3; ++c) linear.data[3 * i + c] = static_cast<float>((*a.sky)[c]);
+    ImageF32 linear;
+    if (rig != nullptr) {
+      std::vector<ImageF32> faces;
+      for (size_t f = 0; f < rig->faces.size(); ++f) {
+        auto face = renderLinear(renderer, rig->faces[f], T_world_camera * rig->T_camera_face[f], settings, a, map);
+        if (!face.ok()) return face.error();
+        faces.push_back(std::move(face).value());
       }
+      linear = resampleLens(*rig, faces);
+    } else {
+      auto rendered = renderLinear(renderer, camera, T_world_camera, settings, a, map);
+      if (!rendered.ok()) return rendered.error();
+      linear = std::move(rendered).value();
     }
     if (k == 0) {
       sum = std::move(linear);
@@ -197,7 +239,17 @@ Result<ImageU8> simulateFrame(Renderer& renderer, const SplineTrajectory& trajec
   wb[0] *= 1.0 + wb_change;
   wb[2] *= 1.0 - wb_change;
   if (ev != 0.0 || wb != std::array<double, 3>{1.0, 1.0, 1.0}) applyExposure(sum, std::exp2(ev), wb);
-  applyVignetting(sum, camera, a.vignetting);
+  if (rig != nullptr) {
+    if (a.vignetting > 0) {
+      for (size_t i = 0; i < rig->cos_angle.size(); ++i) {
+        const double c = std::max(0.0, static_cast<double>(rig->cos_angle[i]));
+        const float factor = static_cast<float>(1.0 - a.vignetting * (1.0 - c * c * c * c));
+        for (int ch = 0; ch < 3; ++ch) sum.data[3 * i + static_cast<size_t>(ch)] *= factor;
+      }
+    }
+  } else {
+    applyVignetting(sum, camera, a.vignetting);
+  }
   addSensorNoise(sum, a.shot_noise, a.read_noise, noise_seed);
   return encodeImage(sum, a.gamma);
 }
@@ -270,6 +322,13 @@ Result<SimulationReport> simulateSequence(const Model& model, const SimulationOp
   RenderSettings settings;
   settings.near_m = options.near_m;
   settings.far_m = options.far_m;
+  // A lens other than the ideal pinhole: its image is resampled from pinhole renders.
+  std::optional<LensRig> rig;
+  if (Result<LensCamera> lens = lensCamera(options.camera); lens.ok() && !lens->isIdealPinhole()) {
+    auto made = makeLensRig(*lens);
+    if (!made.ok()) return made.error();
+    rig = std::move(made).value();
+  }
 
   // Image times: from the trajectory start at 1 / rate.
   const int64_t start = trajectory->startNs();
@@ -289,7 +348,7 @@ Result<SimulationReport> simulateSequence(const Model& model, const SimulationOp
     const std::string rel = fmt::format("images/{:06d}.{}", i, options.jpeg ? "jpg" : "png");
     const std::string path = (fs::path(directory) / rel).string();
     auto image = simulateFrame(renderer, *trajectory, options.camera.T_body_camera, options.camera.intrinsics, t_ns, a,
-                               shadow ? &*shadow : nullptr, settings, subSeed(seed, 1000 + i));
+                               shadow ? &*shadow : nullptr, settings, subSeed(seed, 1000 + i), rig ? &*rig : nullptr);
     Status written = image.ok()
                          ? (options.jpeg ? writeJpeg(path, *image, options.jpeg_quality) : writePng(path, *image))
                          : Status(image.error());

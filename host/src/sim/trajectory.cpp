@@ -112,7 +112,8 @@ KnotTimes makeKnots(double duration_s, double nominal_dt_s) {
 /// Drone: a wobbly loop around the box centre (radius up to 0.65 of the half extent, slowly
 /// breathing in and out), 20-50 m above the box floor, horizontal speed 3.5-7 m/s, heading along
 /// the path, camera 45 deg below the horizon.
-Result<std::vector<Pose>> droneCameraPoses(const BoxFrame& box, const KnotTimes& knots, Mt19937& rnd) {
+Result<std::vector<Pose>> droneCameraPoses(const BoxFrame& box, const KnotTimes& knots, Mt19937& rnd,
+                                           bool agile = false) {
   const Eigen::Vector3d c = box.centre();
   const Eigen::Vector3d h = box.half();
   const double ax = 0.65 * h.x();
@@ -142,6 +143,14 @@ Result<std::vector<Pose>> droneCameraPoses(const BoxFrame& box, const KnotTimes&
   const double z1 = rnd.uniform(0.0, 2.0 * kPi);
   const double z2 = rnd.uniform(0.0, 2.0 * kPi);
   const double pitch = -kPi / 4.0;
+  // Agile: the airframe rolls and pitches about its heading (two sines each, 0.5-1.3 Hz, up to
+  // about 25 deg and 3 rad/s), as a multirotor does when it manoeuvres or fights gusts.
+  const double roll1 = rnd.uniform(0.25, 0.35), roll2 = rnd.uniform(0.06, 0.1);
+  const double pitch1 = rnd.uniform(0.2, 0.3), pitch2 = rnd.uniform(0.05, 0.09);
+  const double fr1 = rnd.uniform(0.5, 0.8), fr2 = rnd.uniform(1.0, 1.3);
+  const double fp1 = rnd.uniform(0.45, 0.75), fp2 = rnd.uniform(0.9, 1.2);
+  const double pr1 = rnd.uniform(0.0, 2.0 * kPi), pr2 = rnd.uniform(0.0, 2.0 * kPi);
+  const double pp1 = rnd.uniform(0.0, 2.0 * kPi), pp2 = rnd.uniform(0.0, 2.0 * kPi);
   std::vector<Pose> poses;
   for (size_t k = 0; k < theta.size(); ++k) {
     const double t = knots.times_s[k];
@@ -155,6 +164,15 @@ Result<std::vector<Pose>> droneCameraPoses(const BoxFrame& box, const KnotTimes&
     if (!R.ok()) return R.error();
     Pose T = Pose::Identity();
     T.linear() = *R;
+    if (agile) {
+      const double roll = roll1 * std::sin(2.0 * kPi * fr1 * t + pr1) + roll2 * std::sin(2.0 * kPi * fr2 * t + pr2);
+      const double tilt = pitch1 * std::sin(2.0 * kPi * fp1 * t + pp1) + pitch2 * std::sin(2.0 * kPi * fp2 * t + pp2);
+      const Eigen::Vector3d forward(std::cos(yaw), std::sin(yaw), 0.0);
+      const Eigen::Vector3d left(-std::sin(yaw), std::cos(yaw), 0.0);
+      const Eigen::Matrix3d wobble =
+          (Eigen::AngleAxisd(roll, forward) * Eigen::AngleAxisd(tilt, left)).toRotationMatrix();
+      T.linear() = wobble * T.linear();
+    }
     T.translation() = eye;
     poses.push_back(T);
   }
@@ -385,17 +403,20 @@ TrajectoryState SplineTrajectory::evaluate(int64_t t_ns) const {
 
 Result<TrajectoryKind> parseTrajectoryKind(const std::string& name) {
   if (name == "drone") return TrajectoryKind::kDroneFlight;
+  if (name == "drone_agile") return TrajectoryKind::kDroneAgile;
   if (name == "handheld") return TrajectoryKind::kHandheld;
   if (name == "aggressive") return TrajectoryKind::kAggressive;
   if (name == "orbit") return TrajectoryKind::kOrbit;
   return makeError(ErrorCode::kInvalidArgument,
-                   "trajectory kind '" + name + "' is unknown (use drone, handheld, aggressive or orbit)");
+                   "trajectory kind '" + name + "' is unknown (use drone, drone_agile, handheld, aggressive or orbit)");
 }
 
 const char* trajectoryKindName(TrajectoryKind kind) {
   switch (kind) {
     case TrajectoryKind::kDroneFlight:
       return "drone";
+    case TrajectoryKind::kDroneAgile:
+      return "drone_agile";
     case TrajectoryKind::kHandheld:
       return "handheld";
     case TrajectoryKind::kAggressive:
@@ -431,6 +452,9 @@ Result<SplineTrajectory> makeTrajectory(const TrajectoryOptions& options, const 
   switch (options.kind) {
     case TrajectoryKind::kDroneFlight:
       cameras = droneCameraPoses(box, knots, rnd);
+      break;
+    case TrajectoryKind::kDroneAgile:
+      cameras = droneCameraPoses(box, knots, rnd, true);
       break;
     case TrajectoryKind::kHandheld:
       cameras = walkCameraPoses(box, knots, rnd, WalkParams{});

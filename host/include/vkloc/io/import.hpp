@@ -27,8 +27,10 @@ Result<Sequence> importTumRgbd(const std::string& tum_directory, const std::opti
 /// mav0/state_groundtruth_estimate0/data.csv when present) into a Sequence. Ground truth is
 /// converted from T_world_body to T_world_camera with the camera's T_body_camera (T_BS);
 /// mav0/imu0/sensor.yaml, when present, gives imu_noise. `euroc_directory` may also be the mav0
-/// folder itself. kNotFound when cam0/sensor.yaml or cam0/data.csv is missing; kUnsupported for
-/// camera models other than pinhole with radial-tangential or equidistant distortion.
+/// folder itself. The camera keeps its calibration: Kalibr camera_model pinhole (radtan:
+/// pinhole; equidistant: kannala_brandt), omni (mei) or ds (double_sphere), as loadCalibration.
+/// kNotFound when cam0/sensor.yaml or cam0/data.csv is missing; kUnsupported for other camera or
+/// distortion models.
 Result<Sequence> importEuroc(const std::string& euroc_directory, const std::string& model = "");
 
 /// Reads a ViSP pose file: a 4x4 homogeneous matrix as 16 numbers (row-major, e.g. the

@@ -32,6 +32,7 @@
 #include "vkloc/core/se3.hpp"
 #include "vkloc/core/status.hpp"
 #include "vkloc/fusion/sensors.hpp"
+#include "vkloc/localize/camera_front.hpp"
 #include "vkloc/localize/initializer.hpp"
 #include "vkloc/localize/keyframe_database.hpp"
 #include "vkloc/localize/keyframe_manager.hpp"
@@ -232,6 +233,10 @@ struct LocalizationResult {
   double live_ms = 0;        ///< Live pyramid, edges and distance fields, ms.
   double align_ms = 0;       ///< Gauss-Newton alignment, ms.
   double total_ms = 0;       ///< Whole localize() call, ms.
+  /// With a camera front: the view the frame was tracked in (T_world_camera is the camera's,
+  /// T_world_camera * T_camera_view the view's) and the remap's time (ms, in total_ms).
+  Pose T_camera_view = Pose::Identity();
+  double front_ms = 0;
 };
 
 /// Tracks a camera through a model, one frame at a time. Thread-safety: one thread calls
@@ -250,13 +255,21 @@ class Localizer {
   Localizer(const Localizer&) = delete;
   Localizer& operator=(const Localizer&) = delete;
 
-  /// Localizes an 8-bit gray image (camera size, 1 channel) taken at t_ns. The guess, when
-  /// given, replaces the motion prior's prediction. A lost frame is not an error (state kLost);
-  /// the next frame is predicted from the last tracked pose. Errors (kInvalidArgument): wrong
-  /// image size or channels, a non-finite or non-rigid guess, t_ns not after the previous
-  /// frame's, no guess and no pose yet (call reset() first); device errors as they come.
+  /// Localizes an 8-bit gray image (camera size, 1 channel; the lens's with a camera front) taken at t_ns. The guess,
+  /// when given, replaces the motion prior's prediction. A lost frame is not an error (state kLost); the next frame is
+  /// predicted from the last tracked pose. Errors (kInvalidArgument): wrong image size or channels, a non-finite or
+  /// non-rigid guess, t_ns not after the previous frame's, no guess and no pose yet (call reset() first); device errors
+  /// as they come.
   Result<LocalizationResult> localize(int64_t t_ns, const ImageU8& gray,
                                       const std::optional<Pose>& T_world_camera_guess = std::nullopt);
+
+  /// Gives the camera front (null: none): localize() then takes the lens's images (its size),
+  /// remaps each to the view (undistorted, or stabilised at the camera's predicted attitude) and
+  /// tracks in it; poses, covariances and guesses stay the physical camera's. The view must be the
+  /// camera this Localizer was made for (kInvalidArgument otherwise). Give it before the first
+  /// frame or call reset() after.
+  Status setCameraFront(std::unique_ptr<CameraFront> front);
+  const CameraFront* cameraFront() const;
 
   /// Gives one IMU reading (body frame; InertialAiding). Readings up to a frame's time should be
   /// given before the frame. kInvalidArgument for a non-finite reading or a time not after the
@@ -289,6 +302,8 @@ class Localizer {
 
  private:
   explicit Localizer(std::unique_ptr<Impl> impl);
+  Result<LocalizationResult> localizeView(int64_t t_ns, const ImageU8& gray,
+                                          const std::optional<Pose>& T_world_view_guess);
   std::unique_ptr<Impl> impl_;
 };
 

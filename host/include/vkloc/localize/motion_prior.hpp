@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -135,6 +136,44 @@ class MotionPrior {
   /// The median depth of the scene in view (metres; the first keyframe's), which scales what an
   /// unknown start velocity may be. Priors without a velocity prior ignore it.
   virtual void setSceneDepth(double /*depth_m*/) {}
+};
+
+/// A prior over the physical camera seen through a view that turns with each frame (the camera
+/// front's T_camera_view, a rotation about the optical centre): poses and covariances in and out
+/// are the view's, the wrapped prior works on the camera's. setView() before each frame's calls.
+class ViewPrior final : public MotionPrior {
+ public:
+  explicit ViewPrior(std::unique_ptr<MotionPrior> camera_prior) : prior_(std::move(camera_prior)) {}
+  /// The view of the frames to come: T_camera_view (camera frame into the view's parent).
+  void setView(const Pose& T_camera_view) { T_camera_view_ = T_camera_view; }
+  const Pose& view() const { return T_camera_view_; }
+  /// The wrapped prior (camera frame).
+  const MotionPrior& cameraPrior() const { return *prior_; }
+
+  Status addImu(const ImuSample& sample) override { return prior_->addImu(sample); }
+  std::optional<MotionPrediction> predict(int64_t t_ns) const override;
+  bool consistent(const MotionPrediction& prediction, const Pose& T_world_view, const Matrix6d& covariance,
+                  double scene_depth_m) const override;
+  void addVisualPose(int64_t t_ns, const Pose& T_world_view, const Matrix6d& covariance) override;
+  std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
+                                    const Pose& guess) override;
+  void reset(const std::optional<Pose>& T_world_view,
+             const std::optional<Eigen::Vector3d>& v_world = std::nullopt) override;
+  std::optional<Pose> lastPose() const override;
+  double lastInnovation() const override { return prior_->lastInnovation(); }
+  std::vector<FilterOutput> takeOutputs() override { return prior_->takeOutputs(); }
+  void setSceneDepth(double depth_m) override { prior_->setSceneDepth(depth_m); }
+
+  /// Pose and covariance (right perturbation) of the camera from the view's, and back.
+  Pose toCamera(const Pose& T_world_view) const { return T_world_view * T_camera_view_.inverse(); }
+  Pose toView(const Pose& T_world_camera) const { return T_world_camera * T_camera_view_; }
+  Matrix6d covarianceToCamera(const Matrix6d& covariance_view) const;
+  Matrix6d covarianceToView(const Matrix6d& covariance_camera) const;
+
+ private:
+  MotionPrediction toView(MotionPrediction p) const;
+  std::unique_ptr<MotionPrior> prior_;
+  Pose T_camera_view_ = Pose::Identity();
 };
 
 /// Constant velocity (or last pose) from the last two poses.

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "vkloc/core/image.hpp"
+#include "vkloc/core/lens_camera.hpp"
 #include "vkloc/io/sequence.hpp"
 #include "vkloc/model/model.hpp"
 #include "vkloc/model/model_write.hpp"
@@ -195,6 +196,12 @@ Result<SimulationOptions> scenarioOptions(const std::string& scene, const std::s
 /// reconstruction; renders look the same as the natural-size demos). kNotFound otherwise.
 Result<Model> scenarioModel(const std::string& scene);
 
+/// Lenses of the built-in scenarios, mounted by defaultBodyCamera(kind): "pinhole" (640x480,
+/// fx = fy = 500), "radtan" (the same with a EuRoC-like barrel distortion: k1 -0.28, k2 0.074,
+/// p1 2e-4, p2 1.8e-5) or "fisheye" (800x800 equidistant, 210 deg field of view, fx = fy = 200).
+/// kNotFound for another name.
+Result<SequenceCamera> scenarioCamera(const std::string& lens, TrajectoryKind kind);
+
 /// Default camera mounting for a trajectory kind: the drone's camera is pitched 45 degrees down
 /// from the body's forward axis (body x forward, y left, z up), the handheld ones look forward.
 Pose defaultBodyCamera(TrajectoryKind kind);
@@ -224,11 +231,31 @@ Result<SimulationReport> simulateSequence(const Model& model, const SimulationOp
                                           const RendererFactory& renderers, const std::string& directory,
                                           const SimulationProgress& progress = {});
 
+/// Pinhole renders that together see a lens's whole field (one render for a lens of up to 60 deg
+/// from the axis, else the faces of a cube map), and where each lens pixel samples them.
+struct LensRig {
+  LensCamera lens;
+  std::vector<PinholeCamera> faces;    ///< Intrinsics of each render.
+  std::vector<Pose> T_camera_face;     ///< Rotation of each render from the lens (same centre).
+  std::vector<int16_t> face_of_pixel;  ///< Per lens pixel: the render it samples, -1: outside the lens's field.
+  std::vector<float> uv;               ///< Per lens pixel: position in that render, pixels.
+  std::vector<float> cos_angle;        ///< Per lens pixel: cosine of its ray's angle from the axis.
+};
+/// The rig of `lens`: renders at 1.25 x the lens's focal length, only those some pixel needs.
+/// kInvalidArgument for an invalid lens or a single render over 8192 px wide.
+Result<LensRig> makeLensRig(const LensCamera& lens);
+/// The lens image (3-channel linear RGB, the lens's size) from the rig's renders (linear RGB, one
+/// per face, in rig order), bilinear; pixels outside the field are 0.
+ImageF32 resampleLens(const LensRig& rig, const std::vector<ImageF32>& faces);
+
 /// Renders one simulated camera image (linear pipeline of the file comment) at time t_ns
 /// (exposure centred on it) from `renderer` (rendering the jittered model). `map` may be null
-/// when lighting is off. Exposure at time t uses exposure_ev and the drift.
+/// when lighting is off. Exposure at time t uses exposure_ev and the drift. With a `rig`, the
+/// image is the rig's lens's (`camera` is then unused): each render of the pipeline becomes the
+/// rig's renders resampled through the lens, and vignetting follows the ray angle.
 Result<ImageU8> simulateFrame(Renderer& renderer, const SplineTrajectory& trajectory, const Pose& T_body_camera,
                               const PinholeCamera& camera, int64_t t_ns, const AppearanceOptions& appearance,
-                              const ShadowMap* map, const RenderSettings& settings, uint64_t noise_seed);
+                              const ShadowMap* map, const RenderSettings& settings, uint64_t noise_seed,
+                              const LensRig* rig = nullptr);
 
 }  // namespace vkloc

@@ -42,11 +42,12 @@ class SplineTrajectory {
 /// Kinds of built-in trajectories.
 enum class TrajectoryKind {
   kDroneFlight,  ///< 10-60 m above ground, camera tilted 45 deg down, smooth turns (city).
+  kDroneAgile,   ///< The drone's path with fast roll and pitch of the airframe (+-25 deg, ~1 Hz).
   kHandheld,     ///< Walking pace, 1.2-1.8 m high, gentle head motion (room).
   kAggressive,   ///< Fast rotations (up to ~3 rad/s) and accelerations, handheld scale.
   kOrbit,        ///< Circle around the scene centre looking at it.
 };
-/// Parses "drone", "handheld", "aggressive", "orbit".
+/// Parses "drone", "drone_agile", "handheld", "aggressive", "orbit".
 Result<TrajectoryKind> parseTrajectoryKind(const std::string& name);
 const char* trajectoryKindName(TrajectoryKind kind);
 

@@ -1,0 +1,100 @@
+// vkloc: the camera front: turns the lens image into the pinhole view the tracker works in
+// (seed paper 000 sec. IV-B, eq. 8). Either an undistorted view fixed to the lens, or an
+// electronically stabilised view (EIS) whose optical axis keeps a chosen angle below the horizon
+// with roll and pitch compensated from the camera's attitude each frame; its heading follows the
+// camera's. The view shares the lens's optical centre: T_camera_view is a pure rotation.
+//
+// Frames: camera = the physical lens (x right, y down, z forward); view = the virtual pinhole
+// camera; world as the model's, `up_world` against gravity.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+
+#include "vkloc/core/camera.hpp"
+#include "vkloc/core/image.hpp"
+#include "vkloc/core/lens_camera.hpp"
+#include "vkloc/core/pose.hpp"
+#include "vkloc/core/remap.hpp"
+#include "vkloc/core/status.hpp"
+
+namespace vkloc {
+
+enum class ViewKind {
+  kUndistorted,  ///< Fixed to the lens, optical axes aligned (a pinhole lens: its own intrinsics).
+  kStabilised,   ///< EIS: axis at pitch_deg below the horizon, no roll, heading of the camera.
+};
+/// "undistorted", "stabilised".
+const char* viewKindName(ViewKind kind);
+Result<ViewKind> parseViewKind(const std::string& name);
+
+struct ViewOptions {
+  ViewKind kind = ViewKind::kUndistorted;
+  /// View size, pixels; 0: the lens image's size.
+  int width = 0;
+  int height = 0;
+  /// Horizontal field of view of the view, degrees (1..170); 0: a pinhole lens keeps its own
+  /// focal lengths and principal point (size permitting), any other lens gets 90.
+  double hfov_deg = 0;
+  /// kStabilised: angle of the view's optical axis below the horizon, degrees (-89..90; 90 = down).
+  double pitch_deg = 0;
+  /// kStabilised: world direction against gravity (normalized on use).
+  Eigen::Vector3d up_world{0, 0, 1};
+  /// kStabilised: the remap table is computed exactly every grid_step_px view pixels and
+  /// bilinearly in between (1 = every pixel; 1..32).
+  int grid_step_px = 8;
+};
+
+/// Lens image -> view image. Not thread-safe (it caches the last table).
+class CameraFront {
+ public:
+  /// kInvalidArgument for an invalid lens (validateLensCamera) or options out of range, or a
+  /// view of which less than half has a source in the lens's valid field.
+  static Result<std::unique_ptr<CameraFront>> create(const LensCamera& lens, const ViewOptions& options);
+
+  const LensCamera& lens() const { return lens_; }
+  const PinholeCamera& view() const { return view_; }
+  const ViewOptions& options() const { return options_; }
+  /// True when the view needs no remap at all (an ideal pinhole lens, kUndistorted, own size).
+  bool identity() const { return identity_; }
+
+  /// R_camera_view for a camera at attitude R_world_camera: identity for kUndistorted.
+  Eigen::Matrix3d viewRotation(const Eigen::Matrix3d& R_world_camera) const;
+  /// T_camera_view (rotation only) for a camera at T_world_camera.
+  Pose viewExtrinsic(const Pose& T_world_camera) const;
+
+  /// Exact remap table of the view turned by R_camera_view (every pixel projected).
+  RemapTable exactTable(const Eigen::Matrix3d& R_camera_view) const;
+  /// The table in use for R_camera_view: cached (kUndistorted: built once, exact), else built
+  /// on the grid (grid_step_px) and interpolated.
+  const RemapTable& table(const Eigen::Matrix3d& R_camera_view);
+
+  /// The view image seen by the lens image `lens_image` (1 channel, the lens's size) through
+  /// table(R_camera_view), bilinear (OpenCV remap; remapBilinear is its reference).
+  /// kInvalidArgument for an image of another size or channel count.
+  Status remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_camera_view, ImageU8& view_image);
+
+  /// Fraction of the last table's pixels that have a source (0..1).
+  double validFraction() const { return valid_fraction_; }
+
+  ~CameraFront();
+
+ private:
+  CameraFront() = default;
+  void fillGrid(const Eigen::Matrix3d& R_camera_view, int step, RemapTable& table) const;
+  bool sourceOf(const Eigen::Matrix3d& R_camera_view, double u, double v, float& su, float& sv) const;
+
+  LensCamera lens_;
+  PinholeCamera view_;
+  ViewOptions options_;
+  Eigen::Vector3d up_world_{0, 0, 1};
+  bool identity_ = false;
+  RemapTable table_;
+  Eigen::Matrix3d table_rotation_ = Eigen::Matrix3d::Zero();
+  bool table_valid_ = false;
+  double valid_fraction_ = 0;
+  struct Maps;
+  std::unique_ptr<Maps> maps_;  ///< OpenCV's fixed-point form of a cached table.
+};
+
+}  // namespace vkloc

@@ -1,0 +1,235 @@
+#include "vkloc/localize/camera_front.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+namespace vkloc {
+
+namespace {
+
+/// Written for view pixels without a source: far outside every image (remap gives 0).
+constexpr float kNoSource = -1.0e5f;
+
+}  // namespace
+
+struct CameraFront::Maps {
+  cv::Mat xy;        ///< CV_16SC2 integer positions.
+  cv::Mat fraction;  ///< CV_16UC1 interpolation table indices.
+};
+
+CameraFront::~CameraFront() = default;
+
+const char* viewKindName(ViewKind kind) { return kind == ViewKind::kStabilised ? "stabilised" : "undistorted"; }
+
+Result<ViewKind> parseViewKind(const std::string& name) {
+  if (name == "undistorted") return ViewKind::kUndistorted;
+  if (name == "stabilised" || name == "stabilized") return ViewKind::kStabilised;
+  return makeError(ErrorCode::kInvalidArgument, fmt::format("unknown view '{}' (undistorted, stabilised)", name));
+}
+
+Result<std::unique_ptr<CameraFront>> CameraFront::create(const LensCamera& lens, const ViewOptions& options) {
+  VKLOC_TRY_STATUS(validateLensCamera(lens));
+  auto bad = [](const std::string& what) {
+    return makeError(ErrorCode::kInvalidArgument, fmt::format("camera front: {}", what));
+  };
+  if (options.width < 0 || options.height < 0 || options.width > 16384 || options.height > 16384 ||
+      (options.width == 0) != (options.height == 0)) {
+    return bad(fmt::format("view size {}x{} is invalid (both 1..16384, or both 0 for the lens's)", options.width,
+                           options.height));
+  }
+  if (!(options.hfov_deg == 0 || (options.hfov_deg >= 1 && options.hfov_deg <= 170))) {
+    return bad(fmt::format("hfov {} deg is outside 1..170 (0: default)", options.hfov_deg));
+  }
+  if (!(options.pitch_deg >= -89 && options.pitch_deg <= 90)) {
+    return bad(fmt::format("pitch {} deg is outside -89..90", options.pitch_deg));
+  }
+  if (!options.up_world.allFinite() || options.up_world.norm() < 1e-9) return bad("up_world is not a direction");
+  if (options.grid_step_px < 1 || options.grid_step_px > 32) {
+    return bad(fmt::format("grid step {} px is outside 1..32", options.grid_step_px));
+  }
+  std::unique_ptr<CameraFront> front(new CameraFront());
+  front->lens_ = lens;
+  front->options_ = options;
+  front->up_world_ = options.up_world.normalized();
+  const int w = options.width > 0 ? options.width : lens.intrinsics.width;
+  const int h = options.height > 0 ? options.height : lens.intrinsics.height;
+  const bool keep_intrinsics = lens.model == LensModel::kPinhole && options.hfov_deg == 0 &&
+                               options.kind == ViewKind::kUndistorted && w == lens.intrinsics.width &&
+                               h == lens.intrinsics.height;
+  if (keep_intrinsics) {
+    front->view_ = lens.intrinsics;
+  } else {
+    const double hfov = options.hfov_deg > 0 ? options.hfov_deg : 90.0;
+    const double f = 0.5 * w / std::tan(0.5 * hfov * M_PI / 180.0);
+    front->view_ = PinholeCamera{f, f, 0.5 * (w - 1), 0.5 * (h - 1), w, h};
+  }
+  front->identity_ = keep_intrinsics && lens.isIdealPinhole();
+  // The view must mostly see through the lens, when their axes are aligned (a stabilised view
+  // turns away from that as the camera does).
+  (void)front->table(Eigen::Matrix3d::Identity());
+  if (front->valid_fraction_ < 0.5) {
+    return bad(fmt::format("only {:.0f} % of the {}x{} view (hfov {:.1f} deg) lies in the lens's field of view",
+                           100.0 * front->valid_fraction_, w, h,
+                           2.0 * std::atan(0.5 * w / front->view_.fx) * 180.0 / M_PI));
+  }
+  return front;
+}
+
+Eigen::Matrix3d CameraFront::viewRotation(const Eigen::Matrix3d& R_world_camera) const {
+  if (options_.kind != ViewKind::kStabilised) return Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d& up = up_world_;
+  // Heading: the horizontal part of forward + image-up, defined for any camera between looking
+  // 45 deg up and past straight down; forward's own horizontal part otherwise.
+  const Eigen::Vector3d forward = R_world_camera.col(2);
+  const Eigen::Vector3d image_up = -R_world_camera.col(1);
+  Eigen::Vector3d heading = forward + image_up;
+  heading -= heading.dot(up) * up;
+  if (heading.norm() < 1e-6) {
+    heading = forward - forward.dot(up) * up;
+    if (heading.norm() < 1e-6) heading = R_world_camera.col(0).cross(up);
+  }
+  heading.normalize();
+  const double p = options_.pitch_deg * M_PI / 180.0;
+  Eigen::Matrix3d R_world_view;
+  const Eigen::Vector3d z = std::cos(p) * heading - std::sin(p) * up;
+  const Eigen::Vector3d x = heading.cross(up).normalized();
+  R_world_view.col(0) = x;
+  R_world_view.col(1) = z.cross(x);
+  R_world_view.col(2) = z;
+  return R_world_camera.transpose() * R_world_view;
+}
+
+Pose CameraFront::viewExtrinsic(const Pose& T_world_camera) const {
+  Pose T = Pose::Identity();
+  T.linear() = viewRotation(T_world_camera.linear());
+  return T;
+}
+
+bool CameraFront::sourceOf(const Eigen::Matrix3d& R_camera_view, double u, double v, float& su, float& sv) const {
+  const Eigen::Vector3d ray_view((u - view_.cx) / view_.fx, (v - view_.cy) / view_.fy, 1.0);
+  Eigen::Vector2d uv;
+  if (!projectLens(lens_, R_camera_view * ray_view, uv)) return false;
+  if (!(uv.x() >= 0 && uv.y() >= 0 && uv.x() <= lens_.intrinsics.width - 1 && uv.y() <= lens_.intrinsics.height - 1)) {
+    return false;
+  }
+  su = static_cast<float>(uv.x());
+  sv = static_cast<float>(uv.y());
+  return true;
+}
+
+RemapTable CameraFront::exactTable(const Eigen::Matrix3d& R_camera_view) const {
+  RemapTable t;
+  fillGrid(R_camera_view, 1, t);
+  return t;
+}
+
+void CameraFront::fillGrid(const Eigen::Matrix3d& R_camera_view, int step, RemapTable& t) const {
+  const int w = view_.width, h = view_.height;
+  t.width = w;
+  t.height = h;
+  t.source_width = lens_.intrinsics.width;
+  t.source_height = lens_.intrinsics.height;
+  t.uv.assign(static_cast<size_t>(w) * h * 2, kNoSource);
+  auto exact = [&](int x, int y) {
+    float su = kNoSource, sv = kNoSource;
+    if (!sourceOf(R_camera_view, x, y, su, sv)) su = sv = kNoSource;
+    float* p = &t.uv[(static_cast<size_t>(y) * w + x) * 2];
+    p[0] = su;
+    p[1] = sv;
+  };
+  if (step <= 1) {
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) exact(x, y);
+    }
+    return;
+  }
+  // Grid nodes every `step` pixels plus the last row and column; cells with four valid corners
+  // are interpolated bilinearly, the others (the edge of the lens's field) projected exactly.
+  std::vector<int> xs, ys;
+  for (int x = 0; x < w; x += step) xs.push_back(x);
+  if (xs.back() != w - 1) xs.push_back(w - 1);
+  for (int y = 0; y < h; y += step) ys.push_back(y);
+  if (ys.back() != h - 1) ys.push_back(h - 1);
+  for (int y : ys) {
+    for (int x : xs) exact(x, y);
+  }
+  auto node = [&](int x, int y) { return &t.uv[(static_cast<size_t>(y) * w + x) * 2]; };
+  for (size_t j = 0; j + 1 < ys.size(); ++j) {
+    const int y0 = ys[j], y1 = ys[j + 1];
+    for (size_t i = 0; i + 1 < xs.size(); ++i) {
+      const int x0 = xs[i], x1 = xs[i + 1];
+      const float* a = node(x0, y0);
+      const float* b = node(x1, y0);
+      const float* c = node(x0, y1);
+      const float* d = node(x1, y1);
+      const bool all_valid = a[0] != kNoSource && b[0] != kNoSource && c[0] != kNoSource && d[0] != kNoSource;
+      const int y_end = j + 2 == ys.size() ? y1 : y1 - 1;
+      const int x_end = i + 2 == xs.size() ? x1 : x1 - 1;
+      for (int y = y0; y <= y_end; ++y) {
+        const float fy = static_cast<float>(y - y0) / static_cast<float>(y1 - y0);
+        for (int x = x0; x <= x_end; ++x) {
+          if ((x == x0 || x == x1) && (y == y0 || y == y1)) continue;  // a node
+          if (!all_valid) {
+            exact(x, y);
+            continue;
+          }
+          const float fx = static_cast<float>(x - x0) / static_cast<float>(x1 - x0);
+          float* p = node(x, y);
+          for (int k = 0; k < 2; ++k) {
+            p[k] = (1 - fy) * ((1 - fx) * a[k] + fx * b[k]) + fy * ((1 - fx) * c[k] + fx * d[k]);
+          }
+        }
+      }
+    }
+  }
+}
+
+const RemapTable& CameraFront::table(const Eigen::Matrix3d& R_camera_view) {
+  if (table_valid_ && (options_.kind != ViewKind::kStabilised || R_camera_view == table_rotation_)) return table_;
+  const bool cached = options_.kind != ViewKind::kStabilised;
+  fillGrid(R_camera_view, cached ? 1 : options_.grid_step_px, table_);
+  table_rotation_ = R_camera_view;
+  table_valid_ = true;
+  size_t valid = 0;
+  for (size_t i = 0; i < table_.uv.size(); i += 2) valid += table_.uv[i] != kNoSource ? 1 : 0;
+  valid_fraction_ = table_.uv.empty() ? 0.0 : static_cast<double>(valid) / static_cast<double>(table_.uv.size() / 2);
+  maps_.reset();
+  if (cached) {
+    maps_ = std::make_unique<Maps>();
+    const cv::Mat uv(table_.height, table_.width, CV_32FC2, table_.uv.data());
+    cv::convertMaps(uv, cv::Mat(), maps_->xy, maps_->fraction, CV_16SC2);
+  }
+  return table_;
+}
+
+Status CameraFront::remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_camera_view, ImageU8& view_image) {
+  const PinholeCamera& k = lens_.intrinsics;
+  if (lens_image.channels != 1 || lens_image.width != k.width || lens_image.height != k.height ||
+      lens_image.data.size() != static_cast<size_t>(k.width) * k.height) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("camera front: image is {}x{} with {} channel(s); the calibration is {}x{} gray",
+                                 lens_image.width, lens_image.height, lens_image.channels, k.width, k.height));
+  }
+  if (identity_) {
+    view_image = lens_image;
+    return Status::success();
+  }
+  const RemapTable& t = table(R_camera_view);
+  if (view_image.width != t.width || view_image.height != t.height || view_image.channels != 1) {
+    view_image = ImageU8(t.width, t.height, 1);
+  }
+  const cv::Mat src(k.height, k.width, CV_8UC1, const_cast<uint8_t*>(lens_image.data.data()));
+  cv::Mat dst(t.height, t.width, CV_8UC1, view_image.data.data());
+  if (maps_) {
+    cv::remap(src, dst, maps_->xy, maps_->fraction, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+  } else {
+    const cv::Mat uv(t.height, t.width, CV_32FC2, const_cast<float*>(t.uv.data()));
+    cv::remap(src, dst, uv, cv::Mat(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+  }
+  return Status::success();
+}
+
+}  // namespace vkloc
