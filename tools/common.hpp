@@ -153,5 +153,7 @@ std::optional<Pose> groundTruthAt(const std::vector<StampedPose>& gt, int64_t t_
 void addVerifyBench(CLI::App& bench);
 /// Adds `vkloc bench reloc` (cmd_bench_reloc.cpp) to the bench verb.
 void addRelocBench(CLI::App& bench);
+/// Adds `vkloc bench remap` (cmd_bench_remap.cpp) to the bench verb.
+void addRemapBench(CLI::App& bench);
 
 }  // namespace vkloc::cli

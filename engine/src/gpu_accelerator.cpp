@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "vkloc/engine/gpu_remap.hpp"
+
 namespace vkloc {
 
 Result<std::unique_ptr<GpuEdgeTrackingBackend>> GpuEdgeTrackingBackend::create(std::shared_ptr<GpuContext> context,
@@ -57,6 +59,11 @@ class GpuAccelerator final : public Accelerator {
     auto backend = GpuEdgeTrackingBackend::create(context_, camera, options);
     if (!backend.ok()) return backend.error();
     return std::unique_ptr<EdgeTrackingBackend>(std::move(backend).value());
+  }
+  Result<std::unique_ptr<ImageRemapper>> createRemapper(const RemapTable& table) override {
+    auto remap = GpuRemap::create(context_, table);
+    if (!remap.ok()) return remap.error();
+    return std::unique_ptr<ImageRemapper>(std::move(remap).value());
   }
 
  private:

@@ -305,4 +305,6 @@ Result<ImageU8> GpuRemap::remap(const ImageU8& source) {
 
 double GpuRemap::lastGpuMs() const { return impl_->last_ms; }
 
+std::string GpuRemap::describe() const { return "GPU remap on " + impl_->context->device().name; }
+
 }  // namespace vkloc

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -15,6 +16,8 @@
 #include <vector>
 
 #include "support/gpu_test_support.hpp"
+#include "vkloc/engine/gpu_accelerator.hpp"
+#include "vkloc/localize/camera_front.hpp"
 
 namespace vkloc::test {
 namespace {
@@ -186,6 +189,45 @@ TEST_F(GpuRemapTest, UndistortionTableMatchesReference) {
   const Agreement off = compare(ImageU8(640, 480, 1), ImageU8(640, 480, 1), table);
   EXPECT_GT(off.no_source, 0.001);
   EXPECT_LT(off.no_source, 0.5);
+}
+
+TEST_F(GpuRemapTest, CameraFrontOnTheDeviceFollowsItsTables) {
+  // A stabilised fisheye view whose table changes every frame: the front on the device gives the
+  // reference remap of each frame's table (the accelerator's remapper, as the Localizer uses it).
+  LensCamera lens;
+  lens.model = LensModel::kKannalaBrandt;
+  lens.intrinsics = PinholeCamera{200.0, 200.0, 399.5, 399.5, 800, 800};
+  lens.k = {0.02, -0.005, 0.001, -0.0001, 0.0};
+  lens.max_angle_deg = 105;
+  ViewOptions view;
+  view.kind = ViewKind::kStabilised;
+  view.width = 240;
+  view.height = 180;
+  view.hfov_deg = 90;
+  view.pitch_deg = 45;
+  auto front = CameraFront::create(lens, view);
+  ASSERT_TRUE(front.ok()) << front.error().message;
+  auto accelerator = makeGpuAccelerator(context_);
+  ASSERT_TRUE(accelerator.ok());
+  auto remapper = (*accelerator)->createRemapper((*front)->table(Eigen::Matrix3d::Identity()));
+  ASSERT_TRUE(remapper.ok()) << remapper.error().message;
+  (*front)->setRemapper(std::move(remapper).value());
+  EXPECT_NE((*front)->remapDescription().find("GPU remap"), std::string::npos);
+  const ImageU8 source = randomImage(800, 800, 21);
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Matrix3d R_world_camera =
+        (Eigen::AngleAxisd(0.2 * i, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(-2.0, Eigen::Vector3d::UnitX()))
+            .toRotationMatrix();
+    const Eigen::Matrix3d R = (*front)->viewRotation(R_world_camera);
+    ImageU8 out;
+    ASSERT_TRUE((*front)->remap(source, R, out).ok());
+    auto reference = remapBilinear(source, (*front)->table(R));
+    ASSERT_TRUE(reference.ok());
+    const Agreement a = compare(out, *reference, (*front)->table(R));
+    EXPECT_GE(a.within1, kMinFractionWithinTolerance) << "frame " << i;
+  }
+  ImageU8 out;
+  EXPECT_FALSE((*front)->remap(ImageU8(640, 480, 1), Eigen::Matrix3d::Identity(), out).ok());
 }
 
 TEST_F(GpuRemapTest, RandomSubPixelTableMatchesReference) {

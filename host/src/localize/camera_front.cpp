@@ -197,7 +197,8 @@ const RemapTable& CameraFront::table(const Eigen::Matrix3d& R_camera_view) {
   for (size_t i = 0; i < table_.uv.size(); i += 2) valid += table_.uv[i] != kNoSource ? 1 : 0;
   valid_fraction_ = table_.uv.empty() ? 0.0 : static_cast<double>(valid) / static_cast<double>(table_.uv.size() / 2);
   maps_.reset();
-  if (cached) {
+  remapper_stale_ = true;
+  if (cached && !remapper_) {
     maps_ = std::make_unique<Maps>();
     const cv::Mat uv(table_.height, table_.width, CV_32FC2, table_.uv.data());
     cv::convertMaps(uv, cv::Mat(), maps_->xy, maps_->fraction, CV_16SC2);
@@ -221,6 +222,16 @@ Status CameraFront::remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_ca
   if (view_image.width != t.width || view_image.height != t.height || view_image.channels != 1) {
     view_image = ImageU8(t.width, t.height, 1);
   }
+  if (remapper_) {
+    if (remapper_stale_) {
+      VKLOC_TRY_STATUS(remapper_->setTable(t));
+      remapper_stale_ = false;
+    }
+    Result<ImageU8> out = remapper_->remap(lens_image);
+    if (!out.ok()) return out.error();
+    view_image = std::move(out).value();
+    return Status::success();
+  }
   const cv::Mat src(k.height, k.width, CV_8UC1, const_cast<uint8_t*>(lens_image.data.data()));
   cv::Mat dst(t.height, t.width, CV_8UC1, view_image.data.data());
   if (maps_) {
@@ -230,6 +241,21 @@ Status CameraFront::remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_ca
     cv::remap(src, dst, uv, cv::Mat(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
   }
   return Status::success();
+}
+
+void CameraFront::setRemapper(std::unique_ptr<ImageRemapper> remapper) {
+  remapper_ = std::move(remapper);
+  remapper_stale_ = true;
+  // Without a device the cached table needs its OpenCV maps again.
+  if (!remapper_ && table_valid_ && options_.kind != ViewKind::kStabilised) {
+    maps_ = std::make_unique<Maps>();
+    const cv::Mat uv(table_.height, table_.width, CV_32FC2, table_.uv.data());
+    cv::convertMaps(uv, cv::Mat(), maps_->xy, maps_->fraction, CV_16SC2);
+  }
+}
+
+std::string CameraFront::remapDescription() const {
+  return remapper_ ? remapper_->describe() : std::string("OpenCV remap (CPU)");
 }
 
 }  // namespace vkloc

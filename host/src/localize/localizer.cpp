@@ -174,6 +174,7 @@ struct Localizer::Impl {
   /// image of the frame and the last camera pose reported (for the next frame's view).
   std::unique_ptr<CameraFront> front;
   ViewPrior* view_prior = nullptr;
+  std::shared_ptr<Accelerator> accelerator;  ///< Null: everything on the CPU.
   ImageU8 view_image;
   std::optional<Pose> last_camera_pose;
   Initializer initializer{InitializerOptions{}};
@@ -746,6 +747,7 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
     if (!created.ok()) return created.error();
     renderer = std::move(created).value();
     impl->device_name = accelerator->describe();
+    impl->accelerator = accelerator;
   } else {
     auto created = CpuRenderer::create(model);
     if (!created.ok()) return created.error();
@@ -878,9 +880,10 @@ std::string Localizer::backendSummary() const {
     policy += fmt::format(" (moved > {:g} x depth or > {:g} deg, inliers < {:g}, or {} frames)",
                           r.max_translation_depth_ratio, r.max_rotation_deg, r.min_inlier_ratio, r.max_frames);
   }
-  return fmt::format("render on {}; live edges + alignment on {} ({}); re-render {}, {}",
+  return fmt::format("render on {}; live edges + alignment on {} ({}); re-render {}, {}{}",
                      m.keyframes->rendererDescription(), where, m.backend_reason, policy,
-                     m.worker() ? "keyframes on a worker thread" : "keyframes made synchronously");
+                     m.worker() ? "keyframes on a worker thread" : "keyframes made synchronously",
+                     m.front && !m.front->identity() ? "; lens image remapped by " + m.front->remapDescription() : "");
 }
 
 Status Localizer::setCameraFront(std::unique_ptr<CameraFront> front) {
@@ -902,6 +905,13 @@ Status Localizer::setCameraFront(std::unique_ptr<CameraFront> front) {
     }
   }
   if (m.view_prior) m.view_prior->setView(Pose::Identity());
+  // The remap runs where the live stages do: on a GPU (its remap stage) when they run there.
+  if (front && !front->identity() && m.accelerator && m.active == m.device_backend.get() &&
+      !m.accelerator->isCpuDriver()) {
+    Result<std::unique_ptr<ImageRemapper>> remapper =
+        m.accelerator->createRemapper(front->table(Eigen::Matrix3d::Identity()));
+    if (remapper.ok()) front->setRemapper(std::move(remapper).value());
+  }
   m.front = std::move(front);
   return Status::success();
 }

@@ -19,26 +19,28 @@ namespace vkloc {
 /// correctly rounded (Vulkan requires it; lavapipe matches bit for bit); in general within 1
 /// gray level. Not thread-safe: one thread at a time per object (several objects may share a
 /// context, as GpuContext describes).
-class GpuRemap {
+class GpuRemap final : public ImageRemapper {
  public:
   /// Allocates the buffers for `table`'s sizes and uploads it. kInvalidArgument for a null
   /// context or an invalid table (validateRemapTable); kUnsupported when the table is larger
   /// than the device's largest storage buffer (128 MiB on lavapipe: 16.7 M output pixels);
   /// kGpuError when the device runs out of memory.
   static Result<std::unique_ptr<GpuRemap>> create(std::shared_ptr<GpuContext> context, const RemapTable& table);
-  ~GpuRemap();
+  ~GpuRemap() override;
   GpuRemap(const GpuRemap&) = delete;
   GpuRemap& operator=(const GpuRemap&) = delete;
 
   /// Replaces the table (e.g. a stabilised view's, every frame): uploads it, nothing else.
   /// kInvalidArgument for an invalid table or one whose output or source size differs from the
   /// table given at creation (create another GpuRemap for other sizes); the old table stays.
-  Status setTable(const RemapTable& table);
+  Status setTable(const RemapTable& table) override;
 
   /// Remaps `source`, an 8-bit single-channel image of the table's source size, into an image of
   /// the table's output size (remapBilinear's result). kInvalidArgument for another size or
   /// channel count; kGpuError when a Vulkan call fails.
-  Result<ImageU8> remap(const ImageU8& source);
+  Result<ImageU8> remap(const ImageU8& source) override;
+  /// "GPU remap on <device>".
+  std::string describe() const override;
 
   /// Device time of the last remap's dispatch, milliseconds (GPU timestamps; where the queue has
   /// none, the host wall time of the submission). 0 before the first remap.

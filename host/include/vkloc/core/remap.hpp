@@ -4,6 +4,7 @@
 // values near hard edges by a few gray levels.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "vkloc/core/image.hpp"
@@ -36,5 +37,18 @@ Status validateRemapTable(const RemapTable& table);
 /// kInvalidArgument when the table is invalid or `source` is not a single-channel image of the
 /// table's source size.
 Result<ImageU8> remapBilinear(const ImageU8& source, const RemapTable& table);
+
+/// Remaps images through a table it holds, on a device (the GPU stage, made by an Accelerator).
+/// Used by one thread at a time.
+class ImageRemapper {
+ public:
+  virtual ~ImageRemapper() = default;
+  /// Replaces the table; kInvalidArgument when its sizes differ from the first table's.
+  virtual Status setTable(const RemapTable& table) = 0;
+  /// The image of `source` (1 channel, the table's source size) through the table, by
+  /// remapBilinear's rule. kInvalidArgument for another size; device errors as they come.
+  virtual Result<ImageU8> remap(const ImageU8& source) = 0;
+  virtual std::string describe() const = 0;
+};
 
 }  // namespace vkloc

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <string>
 
 #include "vkloc/core/camera.hpp"
 #include "vkloc/core/image.hpp"
@@ -74,6 +75,12 @@ class CameraFront {
   /// kInvalidArgument for an image of another size or channel count.
   Status remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_camera_view, ImageU8& view_image);
 
+  /// Remaps on a device from now on (null: on the CPU again), e.g. Accelerator::createRemapper
+  /// of the first table. The device's errors come back from remap().
+  void setRemapper(std::unique_ptr<ImageRemapper> remapper);
+  /// "OpenCV remap (CPU)" or the device remapper's description.
+  std::string remapDescription() const;
+
   /// Fraction of the last table's pixels that have a source (0..1).
   double validFraction() const { return valid_fraction_; }
 
@@ -95,6 +102,8 @@ class CameraFront {
   double valid_fraction_ = 0;
   struct Maps;
   std::unique_ptr<Maps> maps_;  ///< OpenCV's fixed-point form of a cached table.
+  std::unique_ptr<ImageRemapper> remapper_;
+  bool remapper_stale_ = true;  ///< The device holds another table than table_.
 };
 
 }  // namespace vkloc

@@ -10,6 +10,7 @@
 #include "vkloc/core/camera.hpp"
 #include "vkloc/core/image.hpp"
 #include "vkloc/core/pose.hpp"
+#include "vkloc/core/remap.hpp"
 #include "vkloc/core/status.hpp"
 #include "vkloc/model/model.hpp"
 #include "vkloc/render/renderer.hpp"
@@ -86,6 +87,10 @@ class Accelerator {
   /// Edge stages on the device for `camera`.
   virtual Result<std::unique_ptr<EdgeTrackingBackend>> createEdgeBackend(const PinholeCamera& camera,
                                                                          const LiveFrameOptions& options) = 0;
+  /// The camera front's remap on the device (kUnsupported when the device has none).
+  virtual Result<std::unique_ptr<ImageRemapper>> createRemapper(const RemapTable& /*table*/) {
+    return makeError(ErrorCode::kUnsupported, "this device has no remap stage");
+  }
 };
 
 }  // namespace vkloc
