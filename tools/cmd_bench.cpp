@@ -405,6 +405,7 @@ static void addBenchVerb(CLI::App& app) {
 
   addVerifyBench(*bench);
   addRelocBench(*bench);
+  addRemapBench(*bench);
 }
 
 VKLOC_REGISTER_VERB(90, addBenchVerb);
