@@ -1,13 +1,16 @@
 // vkloc bench remap: the remap stage that turns a lens image into the tracker's pinhole view
-// (CameraFront), its speed and its agreement with the float reference (remapBilinear).
+// (CameraFront), its speed and its agreement with the float references (remapBilinear,
+// remapBicubic).
 //  1. Undistortion of a EuRoC-like radial-tangential lens to a view of the same size and
-//     intrinsics: the CPU fast path (CameraFront::remap: OpenCV, cached fixed-point maps), the
-//     reference (one thread), the exact table's build, and GpuRemap (wall and device time, table
-//     upload).
+//     intrinsics, bilinear: the CPU fast path (CameraFront::remap: OpenCV, cached fixed-point
+//     maps), the reference (one thread), the exact table's build, and GpuRemap (wall and device
+//     time, table upload). Then bicubic (CameraFront's default): the same CPU fast path with
+//     INTER_CUBIC and replicated borders, remapBicubic, and GpuRemap's bicubic pipeline.
 //  2. A stabilised view (480x360, hfov 90, pitch 45) of a 210-degree fisheye with a new attitude
 //     every frame: the table on the grid plus OpenCV's remap, against the exact table; the grid
-//     table's largest deviation from the exact one.
-//  3. Agreement on a seeded test image: GPU and OpenCV against remapBilinear, both views.
+//     table's largest deviation from the exact one; bilinear and bicubic, CPU and GPU.
+//  3. Agreement on a seeded test image: GPU and OpenCV against the reference of their
+//     interpolation, both views.
 #include <fmt/format.h>
 
 #include <Eigen/Geometry>
@@ -215,11 +218,11 @@ class Report {
       csv_ = take(PartialFileWriter::open(csv_path));
       check(csv_->appendLine("stage,median_ms,p90_ms,runs,notes"));
     }
-    std::printf("%-46s %9s %9s  %s\n", "stage", "median ms", "p90 ms", "notes");
+    std::printf("%-50s %9s %9s  %s\n", "stage", "median ms", "p90 ms", "notes");
   }
   void row(const std::string& stage, const Timing& t, const std::string& notes) {
     const bool timed = t.runs > 0;
-    std::printf("%-46s %9s %9s  %s\n", stage.c_str(), timed ? fmt::format("{:.3f}", t.median).c_str() : "-",
+    std::printf("%-50s %9s %9s  %s\n", stage.c_str(), timed ? fmt::format("{:.3f}", t.median).c_str() : "-",
                 timed ? fmt::format("{:.3f}", t.p90).c_str() : "-", notes.c_str());
     std::fflush(stdout);
     if (csv_) {
@@ -239,9 +242,9 @@ class Report {
 
 /// The GpuRemap for `table`, or null with the reason in `skip` when the device cannot hold it.
 std::unique_ptr<GpuRemap> makeGpuRemap(const std::shared_ptr<GpuContext>& context, const RemapTable& table,
-                                       std::string& skip) {
+                                       RemapInterpolation interpolation, std::string& skip) {
   if (!context) return nullptr;
-  auto gpu = GpuRemap::create(context, table);
+  auto gpu = GpuRemap::create(context, table, interpolation);
   if (!gpu.ok() && gpu.error().code == ErrorCode::kUnsupported) {
     skip = "skipped: " + gpu.error().message;
     return nullptr;
@@ -277,7 +280,9 @@ void runRemapBench(const RemapBenchArgs& a) {
 
   // 1. Undistortion.
   const LensCamera lens = eurocLikeLens(width, height);
-  auto undistort = take(CameraFront::create(lens, ViewOptions{}));
+  ViewOptions undistorted_bilinear;
+  undistorted_bilinear.interpolation = RemapInterpolation::kBilinear;
+  auto undistort = take(CameraFront::create(lens, undistorted_bilinear));
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
   const ImageU8 lens_image = testImage(width, height, kImageSeed);
   ImageU8 view_image;
@@ -297,7 +302,7 @@ void runRemapBench(const RemapBenchArgs& a) {
              fmt::format("once per lens (every pixel projected); {} runs", kTableBuildRuns));
 
   std::string undistort_skip = gpu_skip;
-  auto gpu = makeGpuRemap(context, table, undistort_skip);
+  auto gpu = makeGpuRemap(context, table, RemapInterpolation::kBilinear, undistort_skip);
   Timing t_gpu, t_gpu_device, t_set;
   ImageU8 gpu_image;
   if (gpu) {
@@ -317,6 +322,41 @@ void runRemapBench(const RemapBenchArgs& a) {
     report.row("undistort: GpuRemap", Timing{}, undistort_skip);
   }
 
+  // 1b. Undistortion, bicubic: CameraFront's default (OpenCV INTER_CUBIC, replicated borders,
+  // pixels without a source zeroed), the reference and the GPU's bicubic pipeline.
+  ViewOptions undistorted_bicubic;
+  undistorted_bicubic.interpolation = RemapInterpolation::kBicubic;
+  auto undistort_cubic = take(CameraFront::create(lens, undistorted_bicubic));
+  ImageU8 view_cubic;
+  const Timing t_fast_cubic =
+      timeRuns(kWarmup, runs, [&](int) { check(undistort_cubic->remap(lens_image, I, view_cubic)); });
+  report.row("undistort bicubic: CameraFront::remap (OpenCV)", t_fast_cubic,
+             fmt::format("cached fixed-point maps (1/32 px), INTER_CUBIC, BORDER_REPLICATE; {:.1f}x bilinear",
+                         t_fast_cubic.median / t_fast.median));
+  ImageU8 reference_cubic;
+  const Timing t_ref_cubic =
+      timeRuns(std::min(kWarmup, 2), runs, [&](int) { reference_cubic = take(remapBicubic(lens_image, table)); });
+  report.row("undistort bicubic: remapBicubic (reference)", t_ref_cubic,
+             fmt::format("float, one thread; {:.1f}x the fast path", t_ref_cubic.median / t_fast_cubic.median));
+  std::string cubic_skip = gpu_skip;
+  auto gpu_cubic = makeGpuRemap(context, table, RemapInterpolation::kBicubic, cubic_skip);
+  Timing t_gpu_cubic, t_gpu_cubic_device;
+  ImageU8 gpu_cubic_image;
+  if (gpu_cubic) {
+    std::vector<double> device_ms;
+    t_gpu_cubic = timeRuns(kWarmup, runs, [&](int i) {
+      gpu_cubic_image = take(gpu_cubic->remap(lens_image));
+      if (i >= 0) device_ms.push_back(gpu_cubic->lastGpuMs());
+    });
+    t_gpu_cubic_device = timing(std::move(device_ms));
+    report.row("undistort bicubic: GpuRemap::remap, wall", t_gpu_cubic,
+               fmt::format("16 taps per pixel; {:.1f}x bilinear", t_gpu_cubic.median / t_gpu.median));
+    report.row("undistort bicubic: GpuRemap::remap, device", t_gpu_cubic_device,
+               fmt::format("lastGpuMs; {:.1f}x bilinear", t_gpu_cubic_device.median / t_gpu_device.median));
+  } else {
+    report.row("undistort bicubic: GpuRemap", Timing{}, cubic_skip);
+  }
+
   // 2. Stabilised view of a fisheye, a new attitude every frame.
   ViewOptions stabilised;
   stabilised.kind = ViewKind::kStabilised;
@@ -325,6 +365,7 @@ void runRemapBench(const RemapBenchArgs& a) {
   stabilised.hfov_deg = 90;
   stabilised.pitch_deg = 45;
   stabilised.up_world = Eigen::Vector3d(0, 0, 1);
+  stabilised.interpolation = RemapInterpolation::kBilinear;
   const LensCamera fisheye = fisheyeLens();
   auto front = take(CameraFront::create(fisheye, stabilised));
   const ImageU8 fisheye_image = testImage(fisheye.intrinsics.width, fisheye.intrinsics.height, kImageSeed + 1);
@@ -361,7 +402,8 @@ void runRemapBench(const RemapBenchArgs& a) {
              fmt::format("every pixel projected; grid table deviates up to {:.4f} px{}", worst_px,
                          mismatched > 0 ? fmt::format(", {} px with a source in one only", mismatched) : ""));
   std::string stab_skip = gpu_skip;
-  auto stab_gpu = makeGpuRemap(context, front->table(front->viewRotation(droneAttitude(0))), stab_skip);
+  auto stab_gpu = makeGpuRemap(context, front->table(front->viewRotation(droneAttitude(0))),
+                               RemapInterpolation::kBilinear, stab_skip);
   Timing t_stab_gpu;
   if (stab_gpu) {
     t_stab_gpu = timeRuns(kWarmup, runs, [&](int i) {
@@ -371,6 +413,30 @@ void runRemapBench(const RemapBenchArgs& a) {
     report.row("stabilised: grid table + GPU setTable + remap", t_stab_gpu, "per frame, wall");
   } else {
     report.row("stabilised: GpuRemap", Timing{}, stab_skip);
+  }
+  // Bicubic: a front of its own (its table on the grid, OpenCV INTER_CUBIC on the float table),
+  // and the GPU's bicubic pipeline fed the same tables.
+  ViewOptions stabilised_bicubic = stabilised;
+  stabilised_bicubic.interpolation = RemapInterpolation::kBicubic;
+  auto front_cubic = take(CameraFront::create(fisheye, stabilised_bicubic));
+  ImageU8 stab_view_cubic;
+  const Timing t_frame_cubic = timeRuns(kWarmup, runs, [&](int i) {
+    check(front_cubic->remap(fisheye_image, front_cubic->viewRotation(droneAttitude(i)), stab_view_cubic));
+  });
+  report.row(
+      "stabilised bicubic: grid table + OpenCV remap", t_frame_cubic,
+      fmt::format("per frame, INTER_CUBIC, BORDER_REPLICATE; {:.1f}x bilinear", t_frame_cubic.median / t_frame.median));
+  std::string stab_cubic_skip = gpu_skip;
+  auto stab_gpu_cubic = makeGpuRemap(context, front_cubic->table(front_cubic->viewRotation(droneAttitude(0))),
+                                     RemapInterpolation::kBicubic, stab_cubic_skip);
+  if (stab_gpu_cubic) {
+    const Timing t = timeRuns(kWarmup, runs, [&](int i) {
+      check(stab_gpu_cubic->setTable(front_cubic->table(front_cubic->viewRotation(droneAttitude(i)))));
+      (void)take(stab_gpu_cubic->remap(fisheye_image));
+    });
+    report.row("stabilised bicubic: grid + GPU setTable + remap", t, "per frame, wall");
+  } else {
+    report.row("stabilised bicubic: GpuRemap", Timing{}, stab_cubic_skip);
   }
 
   // 3. Agreement with the reference on the seeded test images.
@@ -392,6 +458,25 @@ void runRemapBench(const RemapBenchArgs& a) {
     report.row("agreement stabilised: GPU vs reference", Timing{}, agreementNote(*gpu_stab));
   }
   report.row("agreement stabilised: OpenCV vs reference", Timing{}, agreementNote(cv_stab));
+  // Bicubic against remapBicubic: the GPU's pipeline and OpenCV's INTER_CUBIC (pixels without a
+  // source are 0 in both: CameraFront zeroes them).
+  std::optional<Agreement> gpu_cubic_undistort;
+  if (gpu_cubic) {
+    gpu_cubic_undistort = compare(gpu_cubic_image, reference_cubic);
+    report.row("agreement undistort bicubic: GPU vs reference", Timing{}, agreementNote(*gpu_cubic_undistort));
+  }
+  const Agreement cv_cubic_undistort = compare(view_cubic, reference_cubic);
+  report.row("agreement undistort bicubic: OpenCV vs reference", Timing{}, agreementNote(cv_cubic_undistort));
+  check(front_cubic->remap(fisheye_image, R_last, stab_view_cubic));
+  const RemapTable& stab_table_cubic = front_cubic->table(R_last);
+  const ImageU8 stab_reference_cubic = take(remapBicubic(fisheye_image, stab_table_cubic));
+  if (stab_gpu_cubic) {
+    check(stab_gpu_cubic->setTable(stab_table_cubic));
+    report.row("agreement stabilised bicubic: GPU vs reference", Timing{},
+               agreementNote(compare(take(stab_gpu_cubic->remap(fisheye_image)), stab_reference_cubic)));
+  }
+  report.row("agreement stabilised bicubic: OpenCV vs reference", Timing{},
+             agreementNote(compare(stab_view_cubic, stab_reference_cubic)));
   report.commit();
 
   std::string gpu_summary = "GPU skipped";
@@ -407,6 +492,19 @@ void runRemapBench(const RemapBenchArgs& a) {
       "%.2f %% of pixels (max diff %d)\n",
       what.c_str(), t_fast.median, t_ref.median, t_ref.median / t_fast.median, gpu_summary.c_str(), t_frame.median,
       t_exact.median, worst_px, 100.0 * cv_undistort.within_1, cv_undistort.max_diff);
+  std::string gpu_cubic_summary = "GPU skipped";
+  if (gpu_cubic) {
+    gpu_cubic_summary =
+        fmt::format("GPU {:.3f} ms wall ({:.3f} ms device), {}", t_gpu_cubic.median, t_gpu_cubic_device.median,
+                    gpu_cubic_undistort->max_diff == 0
+                        ? "equal to the reference"
+                        : fmt::format("max diff {} from the reference", gpu_cubic_undistort->max_diff));
+  }
+  std::printf(
+      "summary bicubic: undistort %s: CPU fast path %.3f ms (reference %.3f ms), %s; stabilised per frame %.3f ms; "
+      "OpenCV within 1 gray level of the reference on %.2f %% of pixels (max diff %d)\n",
+      what.c_str(), t_fast_cubic.median, t_ref_cubic.median, gpu_cubic_summary.c_str(), t_frame_cubic.median,
+      100.0 * cv_cubic_undistort.within_1, cv_cubic_undistort.max_diff);
 }
 
 }  // namespace

@@ -52,7 +52,8 @@ Model ModelArgs::load() const {
 void CameraArgs::add(CLI::App& app) {
   app.add_option("--camera,-c", file,
                  "Calibration file: vkloc camera.yaml, Kalibr camchain, EuRoC sensor.yaml, OpenCV, ROS camera_info, "
-                 "CamOdoCal, COLMAP cameras.txt, or flat fx fy cx cy width height");
+                 "CamOdoCal, COLMAP cameras.txt, or flat fx fy cx cy width height (without a mounting, the "
+                 "sequence's T_body_camera stays)");
   app.add_option("--camera-name", select, "Camera of a multi-camera file (Kalibr cam1, COLMAP id): name or index");
   app.add_option("--intrinsics", intrinsics,
                  "Inline camera 'fx,fy,cx,cy,width,height' (default 525,525,319.5,239.5,640,480)");
@@ -80,7 +81,13 @@ PinholeCamera inlineIntrinsics(const std::string& intrinsics) {
 
 SequenceCamera CameraArgs::getFull(const SequenceCamera& fallback) const {
   if (!file.empty() && !intrinsics.empty()) throw Failure{"give either --camera or --intrinsics, not both"};
-  if (!file.empty()) return take(loadCalibration(file, select));
+  if (!file.empty()) {
+    SequenceCamera camera = take(loadCalibration(file, select));
+    // Most calibration formats carry no camera-to-IMU mounting (read as the identity): the
+    // sequence's stays.
+    if (camera.T_body_camera.isApprox(Pose::Identity(), 1e-12)) camera.T_body_camera = fallback.T_body_camera;
+    return camera;
+  }
   if (!select.empty()) throw Failure{"--camera-name needs --camera"};
   SequenceCamera camera = fallback;
   if (!intrinsics.empty()) {
@@ -110,6 +117,9 @@ void ViewArgs::add(CLI::App& app) {
                  "compensated, axis --view-pitch below the horizon)")
       ->check(CLI::IsMember({"undistorted", "stabilised", "stabilized"}))
       ->capture_default_str();
+  app.add_option("--view-interpolation", interpolation, "Sampling of the lens image: bicubic | bilinear")
+      ->check(CLI::IsMember({"bilinear", "bicubic"}))
+      ->capture_default_str();
   app.add_option("--view-size", size, "View size 'WxH', pixels (default: the lens image's)");
   app.add_option("--view-hfov", hfov_deg,
                  "View's horizontal field of view, degrees (default: a pinhole lens's own, else 90)");
@@ -131,6 +141,7 @@ ViewOptions ViewArgs::options(const Sequence& seq) const {
   }
   o.hfov_deg = hfov_deg;
   o.pitch_deg = pitch_deg;
+  o.interpolation = interpolation == "bicubic" ? RemapInterpolation::kBicubic : RemapInterpolation::kBilinear;
   if (seq.gravity_world.norm() > 0) o.up_world = -seq.gravity_world.normalized();
   return o;
 }

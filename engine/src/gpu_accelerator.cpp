@@ -60,8 +60,9 @@ class GpuAccelerator final : public Accelerator {
     if (!backend.ok()) return backend.error();
     return std::unique_ptr<EdgeTrackingBackend>(std::move(backend).value());
   }
-  Result<std::unique_ptr<ImageRemapper>> createRemapper(const RemapTable& table) override {
-    auto remap = GpuRemap::create(context_, table);
+  Result<std::unique_ptr<ImageRemapper>> createRemapper(const RemapTable& table,
+                                                        RemapInterpolation interpolation) override {
+    auto remap = GpuRemap::create(context_, table, interpolation);
     if (!remap.ok()) return remap.error();
     return std::unique_ptr<ImageRemapper>(std::move(remap).value());
   }

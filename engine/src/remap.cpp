@@ -21,6 +21,7 @@ using engine::RemapPush;
 static_assert(sizeof(RemapPush) == 32, "RemapPush must match the GLSL std430 push block");
 static_assert(offsetof(RemapPush, pixel_count) == 8);
 static_assert(offsetof(RemapPush, max_u) == 16);
+static_assert(offsetof(RemapPush, source_last_word) == 24);
 
 namespace {
 
@@ -42,6 +43,7 @@ struct GpuRemap::Impl {
   VkDevice device = VK_NULL_HANDLE;
   int width = 0, height = 0, source_width = 0, source_height = 0;
   RemapPush push{};
+  RemapInterpolation interpolation = RemapInterpolation::kBilinear;
   int32_t words_per_invocation = 1;
 
   Buffer table;   // device-local: (u, v) per output pixel, padded to whole words with zeros
@@ -89,6 +91,7 @@ Status GpuRemap::Impl::init() {
   push.word_count = static_cast<uint32_t>(words);
   push.max_u = static_cast<float>(source_width - 1);
   push.max_v = static_cast<float>(source_height - 1);
+  push.source_last_word = static_cast<int32_t>((source_bytes / 4) - 1);
 
   const VkBufferUsageFlags ssbo = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
   auto t = ctx->createBuffer(table_bytes, ssbo, false);
@@ -161,9 +164,13 @@ Status GpuRemap::Impl::init() {
   VkShaderModule shader = VK_NULL_HANDLE;
   VKLOC_VK(vkCreateShaderModule(device, &smci, nullptr, &shader));
   module = DeviceHandle<VkShaderModule>(device, shader, vkDestroyShaderModule);
-  // Constant 0: output uints per invocation.
-  const VkSpecializationMapEntry entry{0, 0, sizeof(int32_t)};
-  VkSpecializationInfo spec{1, &entry, sizeof(int32_t), &words_per_invocation};
+  // Output uints per invocation; the interpolation (one pipeline each, the other path compiled out).
+  const int32_t constants[2] = {words_per_invocation, interpolation == RemapInterpolation::kBicubic
+                                                          ? REMAP_INTERPOLATION_BICUBIC
+                                                          : REMAP_INTERPOLATION_BILINEAR};
+  const VkSpecializationMapEntry entries[2] = {{REMAP_SPEC_WORDS, 0, sizeof(int32_t)},
+                                               {REMAP_SPEC_INTERPOLATION, sizeof(int32_t), sizeof(int32_t)}};
+  VkSpecializationInfo spec{2, entries, sizeof(constants), constants};
   VkComputePipelineCreateInfo cpci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
   cpci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
   cpci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
@@ -251,8 +258,13 @@ Status GpuRemap::Impl::uploadTable(const RemapTable& t) {
 GpuRemap::GpuRemap(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 GpuRemap::~GpuRemap() = default;
 
-Result<std::unique_ptr<GpuRemap>> GpuRemap::create(std::shared_ptr<GpuContext> context, const RemapTable& table) {
+Result<std::unique_ptr<GpuRemap>> GpuRemap::create(std::shared_ptr<GpuContext> context, const RemapTable& table,
+                                                   RemapInterpolation interpolation) {
   if (!context) return makeError(ErrorCode::kInvalidArgument, "GpuRemap: no GPU context");
+  if (interpolation != RemapInterpolation::kBilinear && interpolation != RemapInterpolation::kBicubic) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("GpuRemap: unknown interpolation {}", static_cast<int>(interpolation)));
+  }
   VKLOC_TRY_STATUS(validateRemapTable(table));
   auto impl = std::make_unique<Impl>();
   impl->context = context;
@@ -261,6 +273,7 @@ Result<std::unique_ptr<GpuRemap>> GpuRemap::create(std::shared_ptr<GpuContext> c
   impl->height = table.height;
   impl->source_width = table.source_width;
   impl->source_height = table.source_height;
+  impl->interpolation = interpolation;
   VKLOC_TRY_STATUS(impl->init());
   VKLOC_TRY_STATUS(impl->uploadTable(table));
   return std::unique_ptr<GpuRemap>(new GpuRemap(std::move(impl)));
@@ -305,6 +318,9 @@ Result<ImageU8> GpuRemap::remap(const ImageU8& source) {
 
 double GpuRemap::lastGpuMs() const { return impl_->last_ms; }
 
-std::string GpuRemap::describe() const { return "GPU remap on " + impl_->context->device().name; }
+std::string GpuRemap::describe() const {
+  return fmt::format("GPU remap ({}) on {}", remapInterpolationName(impl_->interpolation),
+                     impl_->context->device().name);
+}
 
 }  // namespace vkloc

@@ -23,16 +23,22 @@ namespace vkloc::engine {
 
 #define REMAP_LOCAL_SIZE 64  // invocations per workgroup (x)
 
+// Specialization constants of remap.comp.
+#define REMAP_SPEC_WORDS 0          // int: output uints per invocation
+#define REMAP_SPEC_INTERPOLATION 1  // int: one of REMAP_INTERPOLATION_*
+#define REMAP_INTERPOLATION_BILINEAR 0
+#define REMAP_INTERPOLATION_BICUBIC 1
+
 // Push constants. 32 bytes.
 struct RemapPush {
-  VKLOC_INT(source_width);   // Source size, pixels.
-  VKLOC_INT(source_height);  // Pixels.
-  VKLOC_UINT(pixel_count);   // Output pixels, width * height.
-  VKLOC_UINT(word_count);    // Output uints, (pixel_count + 3) / 4.
-  VKLOC_FLOAT(max_u);        // source_width - 1: the largest u with a source.
-  VKLOC_FLOAT(max_v);        // source_height - 1.
+  VKLOC_INT(source_width);      // Source size, pixels.
+  VKLOC_INT(source_height);     // Pixels.
+  VKLOC_UINT(pixel_count);      // Output pixels, width * height.
+  VKLOC_UINT(word_count);       // Output uints, (pixel_count + 3) / 4.
+  VKLOC_FLOAT(max_u);           // source_width - 1: the largest u with a source.
+  VKLOC_FLOAT(max_v);           // source_height - 1.
+  VKLOC_INT(source_last_word);  // Index of the source's last uint: (source pixels + 3) / 4 - 1.
   VKLOC_UINT(pad0);
-  VKLOC_UINT(pad1);
 };
 
 #ifdef __cplusplus

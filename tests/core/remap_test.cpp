@@ -1,10 +1,16 @@
-// Tests of the reference remap (core/remap.hpp).
+// Tests of the reference remaps (core/remap.hpp): bilinear and bicubic, and bicubic against
+// OpenCV's INTER_CUBIC.
 #include "vkloc/core/remap.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <vector>
 
 namespace vkloc {
 namespace {
@@ -133,6 +139,251 @@ TEST(Remap, SizeMismatchesAreErrors) {
   ImageU8 truncated = rampImage(8, 6);
   truncated.data.pop_back();
   EXPECT_FALSE(remapBilinear(truncated, table).ok());
+}
+
+/// Every pixel of the output through `remap` with positions (u, v) given per pixel.
+RemapTable pointsTable(int sw, int sh, const std::vector<float>& uv) {
+  return RemapTable{static_cast<int>(uv.size() / 2), 1, sw, sh, uv};
+}
+
+TEST(RemapBicubic, ConstantImageStaysConstant) {
+  // The weights sum to 1 (up to float rounding), border taps replicate: every position with a
+  // source gives the constant, at the borders and corners too.
+  for (const uint8_t level : {uint8_t{0}, uint8_t{1}, uint8_t{77}, uint8_t{254}, uint8_t{255}}) {
+    const ImageU8 source(9, 7, 1, level);
+    std::mt19937 rng(level + 1u);
+    std::uniform_real_distribution<float> U(0.0f, 8.0f), V(0.0f, 6.0f);
+    std::vector<float> uv = {0.0f, 0.0f, 8.0f, 6.0f, 0.3f, 5.9f, 7.99f, 0.01f, 0.5f, 0.5f};
+    for (int i = 0; i < 500; ++i) {
+      uv.push_back(U(rng));
+      uv.push_back(V(rng));
+    }
+    auto out = remapBicubic(source, pointsTable(9, 7, uv));
+    ASSERT_TRUE(out.ok()) << out.error().message;
+    for (size_t i = 0; i < out->data.size(); ++i) {
+      ASSERT_EQ(out->data[i], level) << "level " << int{level} << " at (" << uv[2 * i] << ", " << uv[2 * i + 1] << ")";
+    }
+  }
+}
+
+TEST(RemapBicubic, IntegerPositionsGiveTheSource) {
+  // At t = 0 the weights are exactly (0, 1, 0, 0).
+  const ImageU8 source = rampImage(37, 23);
+  auto out = remapBicubic(source, shiftTable(37, 23, 37, 23, 0.0f, 0.0f));
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  EXPECT_EQ(out->data, source.data);
+  // A shift by whole pixels: the shifted source, the last column and row without a source.
+  auto shifted = remapBicubic(source, shiftTable(37, 23, 37, 23, 2.0f, 1.0f));
+  ASSERT_TRUE(shifted.ok());
+  for (int y = 0; y < 23; ++y) {
+    for (int x = 0; x < 37; ++x) {
+      const uint8_t expected = x + 2 < 37 && y + 1 < 23 ? source.at(x + 2, y + 1) : 0;
+      ASSERT_EQ(shifted->at(x, y), expected) << x << "," << y;
+    }
+  }
+}
+
+TEST(RemapBicubic, ReproducesLinearRampsUpToTheKernelsPositionBias) {
+  // The weights sum to 1, so constants are kept; their first moment is not t but
+  // t + delta(t), delta(t) = -(2a + 1) t (1 - t) (1 - 2t) (0 only for a = -1/2, Keys 1981; for
+  // a = -0.75 |delta| <= 0.048 px, 0 at t = 0 and 1/2). So a linear ramp sampled away from the
+  // borders at (u, v) is the ramp at (u + delta(tx), v + delta(ty)), up to the final rounding.
+  constexpr int kW = 40, kH = 30;
+  ImageU8 source(kW, kH, 1);
+  auto ramp = [](double x, double y) { return 2.0 * x + 3.0 * y + 10.0; };  // 10..175
+  for (int y = 0; y < kH; ++y) {
+    for (int x = 0; x < kW; ++x) source.at(x, y) = static_cast<uint8_t>(ramp(x, y));
+  }
+  auto delta = [](double t) { return 0.5 * t * (1 - t) * (1 - 2 * t); };  // -(2a + 1) = 0.5
+  std::mt19937 rng(7);
+  // All 16 taps inside: x0 - 1 >= 0 and x0 + 2 <= w - 1.
+  std::uniform_real_distribution<float> U(1.0f, kW - 2.001f), V(1.0f, kH - 2.001f);
+  std::vector<float> uv;
+  for (int i = 0; i < 2000; ++i) {
+    uv.push_back(U(rng));
+    uv.push_back(V(rng));
+  }
+  // Half-pixel positions: no bias, the exact mean of the neighbours (x.5 values round up).
+  for (int i = 0; i < 20; ++i) {
+    uv.push_back(1.5f + static_cast<float>(i));
+    uv.push_back(1.5f + static_cast<float>(i % 25));
+  }
+  auto out = remapBicubic(source, pointsTable(kW, kH, uv));
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  double worst_unbiased = 0;
+  for (size_t i = 0; i < out->data.size(); ++i) {
+    const double u = uv[2 * i], v = uv[2 * i + 1];
+    const double expected = ramp(u + delta(u - std::floor(u)), v + delta(v - std::floor(v)));
+    ASSERT_LE(std::abs(out->data[i] - expected), 0.5 + 1e-3) << "at (" << u << ", " << v << ")";
+    worst_unbiased = std::max(worst_unbiased, std::abs(out->data[i] - ramp(u, v)));
+  }
+  // The bias is real: without it, some samples are off by more than the rounding.
+  EXPECT_GT(worst_unbiased, 0.5 + 1e-3);
+  for (size_t i = 2000; i < out->data.size(); ++i) {
+    EXPECT_EQ(out->data[i], static_cast<uint8_t>(std::floor(ramp(uv[2 * i], uv[2 * i + 1]) + 0.5)));
+  }
+}
+
+TEST(RemapBicubic, WeightsFollowTheCubicConvolutionFormula) {
+  // One row of 4 pixels sampled at u = 1.25 (t = 0.25), v = 0: the value is
+  // W(1.25) p0 + W(0.25) p1 + W(0.75) p2 + W(1.75) p3 with a = -0.75.
+  ImageU8 source(4, 1, 1);
+  source.data = {20, 100, 180, 40};
+  auto W = [](double d) {
+    const double a = -0.75;
+    d = std::abs(d);
+    return d <= 1 ? ((a + 2) * d - (a + 3)) * d * d + 1 : ((a * d - 5 * a) * d + 8 * a) * d - 4 * a;
+  };
+  auto out = remapBicubic(source, pointsTable(4, 1, {1.25f, 0.0f, 0.5f, 0.0f}));
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  const double at_125 = W(1.25) * 20 + W(0.25) * 100 + W(0.75) * 180 + W(1.75) * 40;
+  EXPECT_EQ(out->data[0], static_cast<uint8_t>(std::floor(at_125 + 0.5))) << at_125;
+  // u = 0.5: the tap at -1 replicates pixel 0.
+  const double at_05 = W(1.5) * 20 + W(0.5) * 20 + W(0.5) * 100 + W(1.5) * 180;
+  EXPECT_EQ(out->data[1], static_cast<uint8_t>(std::floor(at_05 + 0.5))) << at_05;
+  // Overshoot past 0..255 is clamped: a step sampled next to its edge.
+  ImageU8 step(4, 1, 1);
+  step.data = {0, 0, 255, 255};
+  auto clamped = remapBicubic(step, pointsTable(4, 1, {0.5f, 0.0f, 2.5f, 0.0f}));
+  ASSERT_TRUE(clamped.ok());
+  EXPECT_EQ(clamped->data[0], 0);    // W(1.5) * 255 < 0 before clamping
+  EXPECT_EQ(clamped->data[1], 255);  // 255 - W(1.5) * 255 > 255 before clamping
+}
+
+TEST(RemapBicubic, PositionsOffTheSourceOrNotFiniteGiveZero) {
+  const ImageU8 source(8, 6, 1, 77);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  const std::vector<float> uv = {0.0f, 0.0f,    7.0f, 5.0f, 3.5f, 2.5f, -0.001f, 1.0f, 7.001f, 1.0f, 1.0f,   -1e-6f,
+                                 1.0f, 5.0001f, nan,  1.0f, 1.0f, nan,  inf,     1.0f, 1.0f,   -inf, -1e30f, 1e30f};
+  auto out = remapBicubic(source, pointsTable(8, 6, uv));
+  ASSERT_TRUE(out.ok()) << out.error().message;
+  const std::vector<uint8_t> expected = {77, 77, 77, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+  EXPECT_EQ(out->data, expected);
+}
+
+TEST(RemapBicubic, SizeMismatchesAreErrors) {
+  const ImageU8 source = rampImage(8, 6);
+  const RemapTable table = shiftTable(4, 3, 8, 6, 0.0f, 0.0f);
+  ASSERT_TRUE(remapBicubic(source, table).ok());
+  RemapTable short_uv = table;
+  short_uv.uv.pop_back();
+  auto result = remapBicubic(source, short_uv);
+  ASSERT_FALSE(result.ok());
+  EXPECT_EQ(result.error().code, ErrorCode::kInvalidArgument);
+  RemapTable no_width = table;
+  no_width.width = 0;
+  EXPECT_FALSE(remapBicubic(source, no_width).ok());
+  for (const ImageU8& wrong : {rampImage(7, 6), rampImage(8, 5), ImageU8(8, 6, 3), ImageU8()}) {
+    auto r = remapBicubic(wrong, table);
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.error().code, ErrorCode::kInvalidArgument);
+    EXPECT_NE(r.error().message.find("remapBicubic"), std::string::npos) << r.error().message;
+    EXPECT_NE(r.error().message.find("8x6"), std::string::npos) << r.error().message;
+  }
+}
+
+TEST(RemapBicubic, RemapImageDispatchesOnTheInterpolation) {
+  const ImageU8 source = rampImage(32, 24);
+  const RemapTable table = shiftTable(30, 22, 32, 24, 0.37f, 0.61f);
+  auto bilinear = remapImage(source, table, RemapInterpolation::kBilinear);
+  auto bicubic = remapImage(source, table, RemapInterpolation::kBicubic);
+  ASSERT_TRUE(bilinear.ok() && bicubic.ok());
+  EXPECT_EQ(bilinear->data, remapBilinear(source, table)->data);
+  EXPECT_EQ(bicubic->data, remapBicubic(source, table)->data);
+  EXPECT_NE(bilinear->data, bicubic->data);
+  EXPECT_STREQ(remapInterpolationName(RemapInterpolation::kBilinear), "bilinear");
+  EXPECT_STREQ(remapInterpolationName(RemapInterpolation::kBicubic), "bicubic");
+  EXPECT_FALSE(remapImage(ImageU8(), table, RemapInterpolation::kBicubic).ok());
+}
+
+/// A seeded smooth-ish image: two broad waves over a tilted ramp under soft discs whose edges
+/// ramp over 2..5 px (a defocused edge), 8-bit.
+ImageU8 smoothImage(int w, int h, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  const double p1 = 6.3 * U(rng), p2 = 6.3 * U(rng);
+  std::vector<double> value(static_cast<size_t>(w) * h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const double sx = static_cast<double>(x) / w, sy = static_cast<double>(y) / h;
+      value[static_cast<size_t>(y) * w + x] = 120 + 40 * (sx - sy) + 30 * std::sin(6.3 * (1.3 * sx + 0.7 * sy) + p1) +
+                                              20 * std::sin(6.3 * (2.1 * sx - 1.7 * sy) + p2);
+    }
+  }
+  for (int s = 0; s < 25; ++s) {
+    const double cx = U(rng) * w, cy = U(rng) * h, r = 5 + U(rng) * 0.1 * w, g = 20 + 215 * U(rng);
+    const double ramp = 2 + 3 * U(rng);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const double cover = std::clamp(0.5 - (std::hypot(x - cx, y - cy) - r) / ramp, 0.0, 1.0);
+        double& v = value[static_cast<size_t>(y) * w + x];
+        v = (1 - cover) * v + cover * g;
+      }
+    }
+  }
+  ImageU8 out(w, h, 1);
+  for (size_t i = 0; i < value.size(); ++i) {
+    out.data[i] = static_cast<uint8_t>(std::clamp(std::round(value[i]), 0.0, 255.0));
+  }
+  return out;
+}
+
+TEST(RemapBicubic, AgreesWithOpenCvInterCubicReplicate) {
+  // OpenCV's INTER_CUBIC (same kernel, a = -0.75) with BORDER_REPLICATE and a float map, as the
+  // camera front's CPU path uses it: positions quantised to 1/32 px and fixed-point weights, so
+  // not bit-exact; the pixels without a source (0 in the reference, replicated border in
+  // OpenCV, zeroed by the camera front) are left out.
+  constexpr int kW = 320, kH = 240;
+  const ImageU8 source = smoothImage(kW, kH, 3);
+  RemapTable table{kW, kH, kW, kH, {}};
+  table.uv.resize(2 * static_cast<size_t>(kW) * kH);
+  const double angle = 0.21, scale = 0.93;
+  for (int y = 0; y < kH; ++y) {
+    for (int x = 0; x < kW; ++x) {
+      // A rotation and zoom about the centre with a radial term: positions off the pixel grid,
+      // some of them off the source.
+      const double dx = x - 0.5 * (kW - 1), dy = y - 0.5 * (kH - 1);
+      const double r2 = (dx * dx + dy * dy) / (kW * kW), k = scale * (1 + 0.15 * r2);
+      const size_t i = static_cast<size_t>(y) * kW + x;
+      table.uv[2 * i] = static_cast<float>(0.5 * (kW - 1) + k * (std::cos(angle) * dx - std::sin(angle) * dy) + 0.3);
+      table.uv[2 * i + 1] =
+          static_cast<float>(0.5 * (kH - 1) + k * (std::sin(angle) * dx + std::cos(angle) * dy) - 0.45);
+    }
+  }
+  auto reference = remapBicubic(source, table);
+  ASSERT_TRUE(reference.ok()) << reference.error().message;
+  const cv::Mat src(kH, kW, CV_8UC1, const_cast<uint8_t*>(source.data.data()));
+  const cv::Mat map(kH, kW, CV_32FC2, table.uv.data());
+  cv::Mat dst;
+  cv::remap(src, dst, map, cv::Mat(), cv::INTER_CUBIC, cv::BORDER_REPLICATE);
+  ASSERT_EQ(dst.type(), CV_8UC1);
+  size_t compared = 0, within1 = 0, exact = 0, no_source = 0;
+  int max_diff = 0;
+  for (int y = 0; y < kH; ++y) {
+    for (int x = 0; x < kW; ++x) {
+      const size_t i = static_cast<size_t>(y) * kW + x;
+      const float u = table.uv[2 * i], v = table.uv[2 * i + 1];
+      if (!(u >= 0.0f && u <= kW - 1 && v >= 0.0f && v <= kH - 1)) {
+        ++no_source;
+        EXPECT_EQ(reference->data[i], 0);
+        continue;
+      }
+      const int d = std::abs(static_cast<int>(dst.at<uint8_t>(y, x)) - static_cast<int>(reference->data[i]));
+      ++compared;
+      within1 += d <= 1;
+      exact += d == 0;
+      max_diff = std::max(max_diff, d);
+    }
+  }
+  const double n = static_cast<double>(compared);
+  std::printf(
+      "[ remap ] bicubic vs cv::INTER_CUBIC + BORDER_REPLICATE, %zu px with a source (%zu without): "
+      "equal %.3f %%, within 1 %.3f %%, max |diff| %d\n",
+      compared, no_source, 100.0 * exact / n, 100.0 * within1 / n, max_diff);
+  EXPECT_GT(no_source, 0u);
+  EXPECT_GE(within1 / n, 0.99);
+  EXPECT_LE(max_diff, 6);
 }
 
 }  // namespace

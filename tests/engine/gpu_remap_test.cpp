@@ -1,4 +1,4 @@
-// GPU remap (GpuRemap) against the reference remapBilinear (core/remap.hpp).
+// GPU remap (GpuRemap) against the references remapBilinear and remapBicubic (core/remap.hpp).
 #include "vkloc/engine/gpu_remap.hpp"
 
 #include <gtest/gtest.h>
@@ -148,28 +148,31 @@ constexpr double kMinFractionWithinTolerance = 0.999;
 
 class GpuRemapTest : public GpuTest {
  protected:
-  /// Remaps `source` through `table` on the GPU and with the reference; checks the tolerance
-  /// and prints the agreement.
-  void expectMatchesReference(const char* what, const ImageU8& source, const RemapTable& table) {
-    auto remap = GpuRemap::create(context_, table);
+  /// Remaps `source` through `table` on the GPU and with the reference of `interpolation`;
+  /// checks the tolerance and prints the agreement.
+  void expectMatchesReference(const char* what, const ImageU8& source, const RemapTable& table,
+                              RemapInterpolation interpolation = RemapInterpolation::kBilinear) {
+    auto remap = GpuRemap::create(context_, table, interpolation);
     ASSERT_TRUE(remap.ok()) << remap.error().message;
-    expectMatchesReference(what, **remap, source, table);
+    expectMatchesReference(what, **remap, source, table, interpolation);
   }
 
-  void expectMatchesReference(const char* what, GpuRemap& remap, const ImageU8& source, const RemapTable& table) {
+  /// The same with `remap`, made for `interpolation`.
+  void expectMatchesReference(const char* what, GpuRemap& remap, const ImageU8& source, const RemapTable& table,
+                              RemapInterpolation interpolation = RemapInterpolation::kBilinear) {
     auto gpu = remap.remap(source);
     ASSERT_TRUE(gpu.ok()) << gpu.error().message;
-    auto cpu = remapBilinear(source, table);
+    auto cpu = remapImage(source, table, interpolation);
     ASSERT_TRUE(cpu.ok()) << cpu.error().message;
     ASSERT_EQ(gpu->width, table.width);
     ASSERT_EQ(gpu->height, table.height);
     ASSERT_EQ(gpu->channels, 1);
     const Agreement a = compare(*gpu, *cpu, table);
     std::printf(
-        "[ remap ] %-28s %dx%d from %dx%d: max |diff| %d, equal %.6f %%, within %d %.6f %%, "
+        "[ remap ] %-8s %-28s %dx%d from %dx%d: max |diff| %d, equal %.6f %%, within %d %.6f %%, "
         "no source %.2f %%\n",
-        what, table.width, table.height, table.source_width, table.source_height, a.max_diff, 100.0 * a.exact,
-        kToleranceLevels, 100.0 * a.within1, 100.0 * a.no_source);
+        remapInterpolationName(interpolation), what, table.width, table.height, table.source_width, table.source_height,
+        a.max_diff, 100.0 * a.exact, kToleranceLevels, 100.0 * a.within1, 100.0 * a.no_source);
     EXPECT_GE(a.within1, kMinFractionWithinTolerance) << what << ": max |diff| " << a.max_diff;
     // Pixels without a source are 0 on both: the GPU must not invent values there.
     for (size_t i = 0; i < cpu->data.size(); ++i) {
@@ -205,11 +208,13 @@ TEST_F(GpuRemapTest, CameraFrontOnTheDeviceFollowsItsTables) {
   view.height = 180;
   view.hfov_deg = 90;
   view.pitch_deg = 45;
+  view.interpolation = RemapInterpolation::kBilinear;
   auto front = CameraFront::create(lens, view);
   ASSERT_TRUE(front.ok()) << front.error().message;
   auto accelerator = makeGpuAccelerator(context_);
   ASSERT_TRUE(accelerator.ok());
-  auto remapper = (*accelerator)->createRemapper((*front)->table(Eigen::Matrix3d::Identity()));
+  auto remapper =
+      (*accelerator)->createRemapper((*front)->table(Eigen::Matrix3d::Identity()), RemapInterpolation::kBilinear);
   ASSERT_TRUE(remapper.ok()) << remapper.error().message;
   (*front)->setRemapper(std::move(remapper).value());
   EXPECT_NE((*front)->remapDescription().find("GPU remap"), std::string::npos);
@@ -315,6 +320,9 @@ TEST_F(GpuRemapTest, RejectsBadInput) {
   auto bad_table = GpuRemap::create(context_, invalid);
   ASSERT_FALSE(bad_table.ok());
   EXPECT_EQ(bad_table.error().code, ErrorCode::kInvalidArgument);
+  auto bad_interpolation = GpuRemap::create(context_, table, static_cast<RemapInterpolation>(7));
+  ASSERT_FALSE(bad_interpolation.ok());
+  EXPECT_EQ(bad_interpolation.error().code, ErrorCode::kInvalidArgument);
 
   auto remap = GpuRemap::create(context_, table);
   ASSERT_TRUE(remap.ok()) << remap.error().message;
@@ -326,6 +334,110 @@ TEST_F(GpuRemapTest, RejectsBadInput) {
   }
   // Still usable after the refusals.
   expectMatchesReference("after bad input", **remap, randomImage(80, 60, 2), table);
+}
+
+// Bicubic: the table cases above through the bicubic pipeline against remapBicubic.
+TEST_F(GpuRemapTest, BicubicMatchesReferenceOnTheTableCases) {
+  constexpr RemapInterpolation kCubic = RemapInterpolation::kBicubic;
+  const ImageU8 source = randomImage(640, 480, 11);
+  expectMatchesReference("radial (undistortion)", source, radialTable(640, 480, 640, 480, 0.28, 0.09), kCubic);
+  expectMatchesReference("random sub-pixel + NaN/inf", randomImage(640, 480, 12), randomTable(640, 480, 640, 480, 13),
+                         kCubic);
+  const ImageU8 source14 = randomImage(640, 480, 14);
+  expectMatchesReference("odd output 333x251", source14, similarityTable(333, 251, 640, 480, 1.7, 0.3), kCubic);
+  expectMatchesReference("odd random 333x251", source14, randomTable(333, 251, 640, 480, 15), kCubic);
+  expectMatchesReference("odd source 641x479", randomImage(641, 479, 16), radialTable(333, 251, 641, 479, -0.2, 0.05),
+                         kCubic);
+  // Tiny sources: every tap clamped (replicated) along an axis of 1, 2 or 3 pixels.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  expectMatchesReference("1x1 source", randomImage(1, 1, 17),
+                         RemapTable{5, 1, 1, 1, {0.0f, 0.0f, 1e-7f, 0.0f, -0.0f, 0.0f, 0.0f, nan, 0.0f, -1e-7f}},
+                         kCubic);
+  ImageU8 two(2, 1, 1);
+  two.data = {17, 200};
+  expectMatchesReference("2x1 source", two,
+                         RemapTable{3,
+                                    3,
+                                    2,
+                                    1,
+                                    {0.0f, 0.0f, 0.25f, 0.0f, 0.5f, 0.0f, 0.75f, 0.0f, 1.0f, 0.0f, 1.0001f, 0.0f, 0.3f,
+                                     0.1f, 0.999999f, 0.0f, 0.5f, -0.0f}},
+                         kCubic);
+  RemapTable over_3x2{7, 5, 3, 2, {}};  // a 7x5 grid over the whole 3x2 source, edges included
+  for (int y = 0; y < 5; ++y) {
+    for (int x = 0; x < 7; ++x) {
+      over_3x2.uv.push_back(static_cast<float>(x) / 3.0f);
+      over_3x2.uv.push_back(static_cast<float>(y) / 4.0f);
+    }
+  }
+  expectMatchesReference("3x2 source", randomImage(3, 2, 18), over_3x2, kCubic);
+}
+
+TEST_F(GpuRemapTest, BicubicSetTableReplacesTheTable) {
+  const ImageU8 source = randomImage(640, 480, 21);
+  const RemapTable first = radialTable(320, 240, 640, 480, 0.1, 0.0);
+  auto remap = GpuRemap::create(context_, first, RemapInterpolation::kBicubic);
+  ASSERT_TRUE(remap.ok()) << remap.error().message;
+  GpuRemap& r = **remap;
+  EXPECT_NE(r.describe().find("bicubic"), std::string::npos) << r.describe();
+  expectMatchesReference("setTable: first", r, source, first, RemapInterpolation::kBicubic);
+  for (int frame = 0; frame < 3; ++frame) {
+    const RemapTable next = similarityTable(320, 240, 640, 480, 1.0 + 0.1 * frame, 0.05 * frame);
+    ASSERT_TRUE(r.setTable(next).ok());
+    expectMatchesReference("setTable: next", r, source, next, RemapInterpolation::kBicubic);
+  }
+  const RemapTable last = similarityTable(320, 240, 640, 480, 1.2, 0.1);
+  const Status refused = r.setTable(similarityTable(321, 240, 640, 480, 1.0, 0.0));
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.error().code, ErrorCode::kInvalidArgument);
+  expectMatchesReference("setTable: after refusal", r, source, last, RemapInterpolation::kBicubic);
+  // The two pipelines differ where the positions are off the grid.
+  auto bilinear = GpuRemap::create(context_, last);
+  ASSERT_TRUE(bilinear.ok());
+  EXPECT_NE((*bilinear)->describe().find("bilinear"), std::string::npos) << (*bilinear)->describe();
+  auto bilinear_out = (*bilinear)->remap(source);
+  auto bicubic_out = r.remap(source);
+  ASSERT_TRUE(bilinear_out.ok() && bicubic_out.ok());
+  EXPECT_NE(bilinear_out->data, bicubic_out->data);
+}
+
+TEST_F(GpuRemapTest, CameraFrontBicubicOnTheDeviceFollowsItsTables) {
+  // The accelerator's bicubic remapper in a stabilised camera front: each frame's view is
+  // remapBicubic of that frame's table.
+  LensCamera lens;
+  lens.model = LensModel::kKannalaBrandt;
+  lens.intrinsics = PinholeCamera{200.0, 200.0, 399.5, 399.5, 800, 800};
+  lens.k = {0.02, -0.005, 0.001, -0.0001, 0.0};
+  lens.max_angle_deg = 105;
+  ViewOptions view;
+  view.kind = ViewKind::kStabilised;
+  view.width = 240;
+  view.height = 180;
+  view.hfov_deg = 90;
+  view.pitch_deg = 45;
+  view.interpolation = RemapInterpolation::kBicubic;
+  auto front = CameraFront::create(lens, view);
+  ASSERT_TRUE(front.ok()) << front.error().message;
+  auto accelerator = makeGpuAccelerator(context_);
+  ASSERT_TRUE(accelerator.ok());
+  auto remapper =
+      (*accelerator)->createRemapper((*front)->table(Eigen::Matrix3d::Identity()), RemapInterpolation::kBicubic);
+  ASSERT_TRUE(remapper.ok()) << remapper.error().message;
+  (*front)->setRemapper(std::move(remapper).value());
+  EXPECT_NE((*front)->remapDescription().find("bicubic"), std::string::npos) << (*front)->remapDescription();
+  const ImageU8 source = randomImage(800, 800, 22);
+  for (int i = 0; i < 2; ++i) {
+    const Eigen::Matrix3d R_world_camera =
+        (Eigen::AngleAxisd(0.2 * i, Eigen::Vector3d::UnitX()) * Eigen::AngleAxisd(-2.0, Eigen::Vector3d::UnitX()))
+            .toRotationMatrix();
+    const Eigen::Matrix3d R = (*front)->viewRotation(R_world_camera);
+    ImageU8 out;
+    ASSERT_TRUE((*front)->remap(source, R, out).ok());
+    auto reference = remapBicubic(source, (*front)->table(R));
+    ASSERT_TRUE(reference.ok());
+    const Agreement a = compare(out, *reference, (*front)->table(R));
+    EXPECT_GE(a.within1, kMinFractionWithinTolerance) << "frame " << i << ": max |diff| " << a.max_diff;
+  }
 }
 
 double median(std::vector<double> v) {

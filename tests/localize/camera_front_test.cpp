@@ -86,7 +86,9 @@ TEST(CameraFront, OpenCvRemapMatchesTheReference) {
   // The fast path (OpenCV, positions in 1/32 px fixed point) against remapBilinear (float) on a
   // rendered image: within 1 gray level on 99 % of the pixels and 8 everywhere (the fixed point
   // moves an edge by up to 1/64 px: a few levels on the strongest edges).
-  auto front = CameraFront::create(radtanLens(), ViewOptions{});
+  ViewOptions bilinear;
+  bilinear.interpolation = RemapInterpolation::kBilinear;
+  auto front = CameraFront::create(radtanLens(), bilinear);
   ASSERT_TRUE(front.ok());
   const ImageU8& img = test::localizeFrames(1)[0];
   ImageU8 fast;
@@ -130,6 +132,14 @@ TEST(CameraFront, StabilisedViewHoldsItsPitchWithoutRollAndFollowsTheHeading) {
     // Heading within the perturbation of the camera's.
     const double view_heading = std::atan2(R_world_view(1, 2), R_world_view(0, 2));
     EXPECT_LT(std::abs(std::remainder(view_heading - psi, 2 * M_PI)), 0.6);
+  }
+  // Cameras looking steeply up or straight down along +x: the view still heads along +x.
+  for (double elevation : {60.0, 85.0, -89.0, -60.0}) {
+    const double e = elevation * M_PI / 180;
+    const Pose camera = test::cameraLookingAt({0, 0, 0}, {std::cos(e), 0, std::sin(e)}, {0, 0, 1});
+    const Eigen::Matrix3d R_world_view = camera.linear() * (*front)->viewRotation(camera.linear());
+    EXPECT_GT(R_world_view(0, 2), 0.5) << elevation << " deg";
+    EXPECT_NEAR(R_world_view(1, 2), 0.0, 1e-9) << elevation << " deg";
   }
 }
 

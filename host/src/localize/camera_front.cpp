@@ -81,16 +81,14 @@ Result<std::unique_ptr<CameraFront>> CameraFront::create(const LensCamera& lens,
 Eigen::Matrix3d CameraFront::viewRotation(const Eigen::Matrix3d& R_world_camera) const {
   if (options_.kind != ViewKind::kStabilised) return Eigen::Matrix3d::Identity();
   const Eigen::Vector3d& up = up_world_;
-  // Heading: the horizontal part of forward + image-up, defined for any camera between looking
-  // 45 deg up and past straight down; forward's own horizontal part otherwise.
+  // Heading: the horizontal part of forward - (forward . up) image-up: forward's own for a level
+  // camera, image-up's for one looking straight down (image-down's straight up), and positive
+  // along the camera's heading at every pitch in between (no flip past 45 deg).
   const Eigen::Vector3d forward = R_world_camera.col(2);
   const Eigen::Vector3d image_up = -R_world_camera.col(1);
-  Eigen::Vector3d heading = forward + image_up;
+  Eigen::Vector3d heading = forward - forward.dot(up) * image_up;
   heading -= heading.dot(up) * up;
-  if (heading.norm() < 1e-6) {
-    heading = forward - forward.dot(up) * up;
-    if (heading.norm() < 1e-6) heading = R_world_camera.col(0).cross(up);
-  }
+  if (heading.norm() < 1e-6) heading = R_world_camera.col(0).cross(up);
   heading.normalize();
   const double p = options_.pitch_deg * M_PI / 180.0;
   Eigen::Matrix3d R_world_view;
@@ -193,8 +191,17 @@ const RemapTable& CameraFront::table(const Eigen::Matrix3d& R_camera_view) {
   fillGrid(R_camera_view, cached ? 1 : options_.grid_step_px, table_);
   table_rotation_ = R_camera_view;
   table_valid_ = true;
-  size_t valid = 0;
-  for (size_t i = 0; i < table_.uv.size(); i += 2) valid += table_.uv[i] != kNoSource ? 1 : 0;
+  // Pixels without a source: 0 in the view (OpenCV replicates the border for taps that fall
+  // outside the lens image, as the reference clamps them; a pixel with no source is zeroed).
+  no_source_.clear();
+  for (size_t i = 0; i < table_.uv.size(); i += 2) {
+    const float u = table_.uv[i], v = table_.uv[i + 1];
+    if (!(u >= 0 && v >= 0 && u <= static_cast<float>(table_.source_width - 1) &&
+          v <= static_cast<float>(table_.source_height - 1))) {
+      no_source_.push_back(static_cast<uint32_t>(i / 2));
+    }
+  }
+  const size_t valid = table_.uv.size() / 2 - no_source_.size();
   valid_fraction_ = table_.uv.empty() ? 0.0 : static_cast<double>(valid) / static_cast<double>(table_.uv.size() / 2);
   maps_.reset();
   remapper_stale_ = true;
@@ -234,12 +241,14 @@ Status CameraFront::remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_ca
   }
   const cv::Mat src(k.height, k.width, CV_8UC1, const_cast<uint8_t*>(lens_image.data.data()));
   cv::Mat dst(t.height, t.width, CV_8UC1, view_image.data.data());
+  const int interpolation = options_.interpolation == RemapInterpolation::kBicubic ? cv::INTER_CUBIC : cv::INTER_LINEAR;
   if (maps_) {
-    cv::remap(src, dst, maps_->xy, maps_->fraction, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+    cv::remap(src, dst, maps_->xy, maps_->fraction, interpolation, cv::BORDER_REPLICATE);
   } else {
     const cv::Mat uv(t.height, t.width, CV_32FC2, const_cast<float*>(t.uv.data()));
-    cv::remap(src, dst, uv, cv::Mat(), cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+    cv::remap(src, dst, uv, cv::Mat(), interpolation, cv::BORDER_REPLICATE);
   }
+  for (uint32_t i : no_source_) view_image.data[i] = 0;
   return Status::success();
 }
 

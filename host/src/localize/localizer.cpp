@@ -699,7 +699,13 @@ struct Localizer::Impl {
     lead = std::clamp(lead, std::min(1, options.max_keyframe_lead_frames), options.max_keyframe_lead_frames);
     const int64_t t_target = t_ns + lead * frame_interval_ns;
     const std::optional<MotionPrediction> predicted = motion->predict(t_target);
-    const Pose T_target = predicted ? predicted->T_world_camera : fallback;
+    Pose T_target = predicted ? predicted->T_world_camera : fallback;
+    if (predicted && front && front->options().kind == ViewKind::kStabilised) {
+      // The view the camera will have then: stabilised at the attitude predicted for then.
+      if (std::optional<MotionPrediction> at_target = view_prior->cameraPrior().predict(t_target)) {
+        T_target = at_target->T_world_camera * front->viewExtrinsic(at_target->T_world_camera);
+      }
+    }
     if (!keyframes->needsKeyframe(T_target)) return;
     KeyframeRequest request;
     request.T_world_ref = T_target;
@@ -858,6 +864,7 @@ Status Localizer::startSearch(const std::optional<SearchRegion>& region) {
   }
   reset(Pose::Identity());
   m.motion->reset(std::nullopt, std::nullopt);  // no pose until the search finds one
+  m.last_camera_pose.reset();                   // nor an attitude for a stabilised view
   m.searching = true;
   m.search_region = region;
   return Status::success();
@@ -909,7 +916,7 @@ Status Localizer::setCameraFront(std::unique_ptr<CameraFront> front) {
   if (front && !front->identity() && m.accelerator && m.active == m.device_backend.get() &&
       !m.accelerator->isCpuDriver()) {
     Result<std::unique_ptr<ImageRemapper>> remapper =
-        m.accelerator->createRemapper(front->table(Eigen::Matrix3d::Identity()));
+        m.accelerator->createRemapper(front->table(Eigen::Matrix3d::Identity()), front->options().interpolation);
     if (remapper.ok()) front->setRemapper(std::move(remapper).value());
   }
   m.front = std::move(front);

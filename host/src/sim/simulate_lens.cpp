@@ -55,7 +55,14 @@ Result<LensRig> makeLensRig(const LensCamera& lens) {
     }
   }
   const double f = 1.25 * std::max(k.fx, k.fy);
-  const bool single = lensMaxAngle(lens) <= 60.0 * M_PI / 180.0;
+  // One render when every pixel's ray is within 60 deg of the axis, else a cube map.
+  double max_angle = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (valid[i])
+      max_angle =
+          std::max(max_angle, std::acos(std::clamp(static_cast<double>(rays[i].z() / rays[i].norm()), -1.0, 1.0)));
+  }
+  const bool single = max_angle <= 60.0 * M_PI / 180.0;
   if (single) {
     const int w = 2 * static_cast<int>(std::ceil(f * max_tan_x)) + 4;
     const int h = 2 * static_cast<int>(std::ceil(f * max_tan_y)) + 4;

@@ -1,7 +1,7 @@
 // vkloc: image remapping through a table (undistortion, stabilised views). Standard library only.
-// remapBilinear is the reference: the GPU stage (GpuRemap, engine/) computes the same float
-// operations; the fast CPU path (OpenCV's remap) quantises positions to 1/32 px, which moves
-// values near hard edges by a few gray levels.
+// remapBilinear and remapBicubic are the references: the GPU stage (GpuRemap, engine/) computes
+// the same float operations; the fast CPU path (OpenCV's remap) quantises positions to 1/32 px and
+// weights to fixed point, which moves values near hard edges by a few gray levels.
 #pragma once
 
 #include <string>
@@ -11,6 +11,15 @@
 #include "vkloc/core/status.hpp"
 
 namespace vkloc {
+
+/// How output pixels are sampled from the source.
+enum class RemapInterpolation {
+  kBilinear,  ///< 2x2 taps (remapBilinear).
+  kBicubic,   ///< 4x4 taps, cubic convolution with a = -0.75 (remapBicubic; OpenCV's INTER_CUBIC).
+};
+
+/// "bilinear" or "bicubic".
+const char* remapInterpolationName(RemapInterpolation interpolation);
 
 /// For each pixel of an output image: where to sample the source image.
 struct RemapTable {
@@ -38,6 +47,27 @@ Status validateRemapTable(const RemapTable& table);
 /// table's source size.
 Result<ImageU8> remapBilinear(const ImageU8& source, const RemapTable& table);
 
+/// The reference bicubic remap: cubic convolution (Keys 1981, with a = -0.75 as OpenCV's
+/// INTER_CUBIC) in float of the 4x4 source pixels around (u, v), taps outside the source
+/// replaced by the nearest border pixel (OpenCV's BORDER_REPLICATE), rounded to nearest (0.5 up)
+/// and clamped to 0..255; pixels without a source get 0 (the rule of RemapTable::uv). Exactly:
+/// x0 = floor(u), t = u - x0, taps x_k = clamp(x0 - 1 + k, 0, source_width - 1) for k = 0..3
+/// (y likewise with s = v - y0), weights
+///   wx = (W(1 + t), W(t), W(1 - t), W(2 - t)),
+///   W(d) = ((a + 2) d - (a + 3)) d d + 1          for d <= 1,
+///   W(d) = ((a d - 5a) d + 8a) d - 4a             for 1 < d <= 2,
+/// each row k: r_k = ((wx0 p_k0 + wx1 p_k1) + wx2 p_k2) + wx3 p_k3, then
+/// value = ((wy0 r_0 + wy1 r_1) + wy2 r_2) + wy3 r_3, every product and sum rounded to float in
+/// this order (no fma; W evaluated as written, left to right), output
+/// clamp(floor(value + 0.5), 0, 255). Overshoots at edges (the negative lobes) are clamped.
+/// Constants are kept; a linear ramp is sampled at t + delta(t), delta = -(2a + 1) t (1 - t) (1 - 2t)
+/// (|delta| <= 0.048 px; only a = -1/2 has none).
+/// GpuRemap (engine) computes the same operations. Errors as remapBilinear's.
+Result<ImageU8> remapBicubic(const ImageU8& source, const RemapTable& table);
+
+/// remapBilinear or remapBicubic, as `interpolation` says.
+Result<ImageU8> remapImage(const ImageU8& source, const RemapTable& table, RemapInterpolation interpolation);
+
 /// Remaps images through a table it holds, on a device (the GPU stage, made by an Accelerator).
 /// Used by one thread at a time.
 class ImageRemapper {
@@ -45,8 +75,9 @@ class ImageRemapper {
   virtual ~ImageRemapper() = default;
   /// Replaces the table; kInvalidArgument when its sizes differ from the first table's.
   virtual Status setTable(const RemapTable& table) = 0;
-  /// The image of `source` (1 channel, the table's source size) through the table, by
-  /// remapBilinear's rule. kInvalidArgument for another size; device errors as they come.
+  /// The image of `source` (1 channel, the table's source size) through the table, by the rule of
+  /// the interpolation the remapper was made with (remapImage). kInvalidArgument for another
+  /// size; device errors as they come.
   virtual Result<ImageU8> remap(const ImageU8& source) = 0;
   virtual std::string describe() const = 0;
 };

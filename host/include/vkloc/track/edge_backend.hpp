@@ -88,7 +88,8 @@ class Accelerator {
   virtual Result<std::unique_ptr<EdgeTrackingBackend>> createEdgeBackend(const PinholeCamera& camera,
                                                                          const LiveFrameOptions& options) = 0;
   /// The camera front's remap on the device (kUnsupported when the device has none).
-  virtual Result<std::unique_ptr<ImageRemapper>> createRemapper(const RemapTable& /*table*/) {
+  virtual Result<std::unique_ptr<ImageRemapper>> createRemapper(const RemapTable& /*table*/,
+                                                                RemapInterpolation /*interpolation*/) {
     return makeError(ErrorCode::kUnsupported, "this device has no remap stage");
   }
 };

@@ -1,0 +1,77 @@
+# Accuracy through lenses (issue: cameras as users have them). Arguments: -DVKLOC=path -DWORK=dir
+# -DCASE=name.
+#   fisheye_eis   the agile drone (airframe rolling and pitching ~25 deg at ~1 Hz) in the city,
+#                 hard appearance, 210-degree fisheye 45 deg down, 100 frames: tracked through a
+#                 stabilised view (EIS, 480x360, 90 deg, axis 45 deg below the horizon) and
+#                 through the fixed central crop of the same size: EIS loses no frame, no more
+#                 frames than the crop are bridged by the IMU alone, and its median error is at
+#                 most 0.5 % of the scene depth and at most 10 % above the crop's.
+#   radtan_mild, radtan_euroc   the room (easy, 100 frames) and the same images through a
+#                 radial-tangential lens (vkloc distort; mild: k1 -0.1 k2 0.01; euroc: EuRoC's
+#                 k1 -0.28 k2 0.074), tracked through the undistorted view: no frame lost and
+#                 median errors within 10 % (+0.1 mm) of the undistorted run's.
+cmake_minimum_required(VERSION 3.22)
+include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
+
+set(failures "")
+function(track_case label seq)
+  set(dir ${WORK}/${label})
+  file(REMOVE_RECURSE ${dir})
+  run("track ${label}" ${VKLOC} track --sequence ${seq} --out ${dir}/t.txt --report ${dir}/report --keyframes sync
+      --filter ekf --quiet --no-vulkan ${ARGN})
+  foreach(key frames lost inertial translation_median_m translation_max_m rotation_median_deg hz_median
+              scene_depth_median_m)
+    json_number(${key} ${dir}/report/track.json ${key})
+    set(${label}_${key} ${${key}} PARENT_SCOPE)
+  endforeach()
+  message(STATUS "${label}: ${frames} frames, lost ${lost}, inertial only ${inertial}, translation median "
+                 "${translation_median_m} m max ${translation_max_m} m, rotation median ${rotation_median_deg} deg, "
+                 "scene depth ${scene_depth_median_m} m, ${hz_median} Hz")
+endfunction()
+
+function(check label condition message)
+  execute_process(COMMAND awk "BEGIN { if (${condition}) print \"ok\"; else print \"bad\" }"
+                  OUTPUT_VARIABLE verdict OUTPUT_STRIP_TRAILING_WHITESPACE)
+  if(NOT verdict STREQUAL "ok")
+    set(failures "${failures}  ${label}: ${message}\n" PARENT_SCOPE)
+  endif()
+endfunction()
+
+if(CASE STREQUAL "fisheye_eis")
+  set(seq ${WORK}/city_hard_agile_fisheye)
+  if(NOT EXISTS ${seq}/images.txt)
+    run("simulate" ${VKLOC} simulate city hard --lens fisheye --trajectory drone_agile --frames 100 --out ${seq})
+  endif()
+  set(view --view-size 480x360 --view-hfov 90 --view-pitch 45)
+  track_case(eis ${seq} --view stabilised ${view})
+  track_case(crop ${seq} --view undistorted ${view})
+  check(eis "${eis_lost} == 0" "lost ${eis_lost} frames")
+  check(eis "${eis_inertial} <= ${crop_inertial}" "${eis_inertial} frames by the IMU alone, the crop ${crop_inertial}")
+  check(eis "${eis_translation_median_m} <= 0.005 * ${eis_scene_depth_median_m}"
+        "median ${eis_translation_median_m} m > 0.5 % of the depth")
+  check(eis "${eis_translation_median_m} <= 1.1 * ${crop_translation_median_m}"
+        "median ${eis_translation_median_m} m > 1.1 x the crop's ${crop_translation_median_m} m")
+elseif(CASE MATCHES "^radtan_(mild|euroc)$")
+  set(k_mild "-0.1,0.01,1e-4,-1e-4,0")
+  set(k_euroc "-0.28,0.074,2e-4,1.8e-5,0")
+  set(seq ${WORK}/room_easy)
+  if(NOT EXISTS ${seq}/images.txt)
+    run("simulate" ${VKLOC} simulate room easy --frames 100 --out ${seq})
+  endif()
+  set(lens ${CMAKE_MATCH_1})
+  set(distorted ${WORK}/room_easy_${lens})
+  file(REMOVE_RECURSE ${distorted})
+  run("distort" ${VKLOC} distort --sequence ${seq} --out ${distorted} --k=${k_${lens}})
+  track_case(pinhole ${seq})
+  track_case(${lens} ${distorted})
+  check(${lens} "${${lens}_lost} == 0" "lost ${${lens}_lost} frames")
+  check(${lens} "${${lens}_translation_median_m} <= 1.1 * ${pinhole_translation_median_m} + 1e-4"
+        "median ${${lens}_translation_median_m} m > 1.1 x the pinhole's ${pinhole_translation_median_m} m + 0.1 mm")
+  check(${lens} "${${lens}_rotation_median_deg} <= 1.1 * ${pinhole_rotation_median_deg} + 0.005"
+        "median rotation ${${lens}_rotation_median_deg} deg > 1.1 x the pinhole's ${pinhole_rotation_median_deg} deg")
+else()
+  message(FATAL_ERROR "unknown case ${CASE}")
+endif()
+if(NOT failures STREQUAL "")
+  message(FATAL_ERROR "${CASE}: requirements not met:\n${failures}")
+endif()
