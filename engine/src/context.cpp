@@ -511,6 +511,33 @@ Result<engine::DeviceHandle<VkCommandPool>> GpuContext::Impl::createCommandPool(
   return engine::DeviceHandle<VkCommandPool>(device, pool, vkDestroyCommandPool);
 }
 
+Result<engine::DeviceHandle<VkFence>> GpuContext::Impl::createFence() {
+  VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  VkFence fence = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateFence(device, &fci, nullptr, &fence));
+  return engine::DeviceHandle<VkFence>(device, fence, vkDestroyFence);
+}
+
+uint64_t GpuContext::Impl::timestampMask() const {
+  if (!properties.limits.timestampComputeAndGraphics) return 0;
+  uint32_t count = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(physical, &count, nullptr);
+  std::vector<VkQueueFamilyProperties> families(count);
+  vkGetPhysicalDeviceQueueFamilyProperties(physical, &count, families.data());
+  const uint32_t valid_bits = families[queue_family].timestampValidBits;
+  return valid_bits >= 64 ? ~0ull : ((1ull << valid_bits) - 1);
+}
+
+Result<engine::DeviceHandle<VkQueryPool>> GpuContext::Impl::createTimestampPool(uint32_t count) {
+  if (timestampMask() == 0) return engine::DeviceHandle<VkQueryPool>();
+  VkQueryPoolCreateInfo qpci{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+  qpci.queryType = VK_QUERY_TYPE_TIMESTAMP;
+  qpci.queryCount = count;
+  VkQueryPool pool = VK_NULL_HANDLE;
+  VKLOC_VK(vkCreateQueryPool(device, &qpci, nullptr, &pool));
+  return engine::DeviceHandle<VkQueryPool>(device, pool, vkDestroyQueryPool);
+}
+
 Status GpuContext::Impl::submit(const VkSubmitInfo& si, VkFence fence) {
   std::lock_guard<std::mutex> lock(queue_mutex);
   VKLOC_VK(vkQueueSubmit(queue, 1, &si, fence));

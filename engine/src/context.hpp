@@ -84,6 +84,16 @@ struct GpuContext::Impl {
   /// Allocates a primary command buffer from `pool`.
   Result<VkCommandBuffer> allocateCommandBuffer(VkCommandPool pool);
 
+  /// An unsignalled fence.
+  Result<engine::DeviceHandle<VkFence>> createFence();
+
+  /// Mask of the valid bits of a timestamp on `queue_family`; 0 when the queue does not
+  /// support compute timestamps.
+  uint64_t timestampMask() const;
+
+  /// A timestamp query pool of `count` queries, or an empty handle when timestampMask() is 0.
+  Result<engine::DeviceHandle<VkQueryPool>> createTimestampPool(uint32_t count);
+
   /// vkQueueSubmit of one submission under the queue lock.
   Status submit(const VkSubmitInfo& submit_info, VkFence fence);
 

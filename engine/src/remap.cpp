@@ -182,10 +182,9 @@ Status GpuRemap::Impl::init() {
   VKLOC_VK(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipe));
   pipeline = DeviceHandle<VkPipeline>(device, pipe, vkDestroyPipeline);
 
-  VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-  VkFence f = VK_NULL_HANDLE;
-  VKLOC_VK(vkCreateFence(device, &fci, nullptr, &f));
-  fence = DeviceHandle<VkFence>(device, f, vkDestroyFence);
+  auto created_fence = ctx->createFence();
+  if (!created_fence.ok()) return created_fence.error();
+  fence = std::move(*created_fence);
   auto created_pool = ctx->createCommandPool();
   if (!created_pool.ok()) return created_pool.error();
   command_pool = std::move(*created_pool);
@@ -194,20 +193,12 @@ Status GpuRemap::Impl::init() {
   cmd = *command;
 
   // Timestamps where the queue supports them.
-  uint32_t qcount = 0;
-  vkGetPhysicalDeviceQueueFamilyProperties(ctx->physical, &qcount, nullptr);
-  std::vector<VkQueueFamilyProperties> families(qcount);
-  vkGetPhysicalDeviceQueueFamilyProperties(ctx->physical, &qcount, families.data());
-  const uint32_t valid_bits = families[ctx->queue_family].timestampValidBits;
-  if (valid_bits > 0 && ctx->properties.limits.timestampComputeAndGraphics) {
-    VkQueryPoolCreateInfo qpci{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
-    qpci.queryType = VK_QUERY_TYPE_TIMESTAMP;
-    qpci.queryCount = 2;
-    VkQueryPool qp = VK_NULL_HANDLE;
-    VKLOC_VK(vkCreateQueryPool(device, &qpci, nullptr, &qp));
-    query_pool = DeviceHandle<VkQueryPool>(device, qp, vkDestroyQueryPool);
+  auto created_queries = ctx->createTimestampPool(2);
+  if (!created_queries.ok()) return created_queries.error();
+  query_pool = std::move(*created_queries);
+  if (query_pool) {
     timestamp_ns = ctx->properties.limits.timestampPeriod;
-    timestamp_mask = valid_bits >= 64 ? ~0ull : ((1ull << valid_bits) - 1);
+    timestamp_mask = ctx->timestampMask();
   }
   return record();
 }

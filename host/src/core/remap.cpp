@@ -87,15 +87,14 @@ float cubicSum(const float w[4], const float p[4]) {
   return s012 + m3;
 }
 
-}  // namespace
-
-const char* remapInterpolationName(RemapInterpolation interpolation) {
-  return interpolation == RemapInterpolation::kBicubic ? "bicubic" : "bilinear";
-}
-
-Result<ImageU8> remapBilinear(const ImageU8& source, const RemapTable& table) {
+/// The loop shared by the reference remaps: validates `table` and `source` (errors name `who`),
+/// then for each output pixel whose (u, v) lies on the source rounds
+/// sample(src, sw, sh, x0, y0, fx, fy) to uint8, where (x0, y0) = floor(u, v) and (fx, fy) the
+/// fractions in [0, 1). Other pixels (NaN, +-inf, off the source) stay 0.
+template <typename Sample>
+Result<ImageU8> remapEach(const char* who, const ImageU8& source, const RemapTable& table, Sample&& sample) {
   VKLOC_TRY_STATUS(validateRemapTable(table));
-  VKLOC_TRY_STATUS(checkSource("remapBilinear", source, table));
+  VKLOC_TRY_STATUS(checkSource(who, source, table));
   const int sw = table.source_width, sh = table.source_height;
   ImageU8 out(table.width, table.height, 1);
   const float max_u = static_cast<float>(sw - 1), max_v = static_cast<float>(sh - 1);
@@ -108,6 +107,20 @@ Result<ImageU8> remapBilinear(const ImageU8& source, const RemapTable& table) {
     const float x0f = std::floor(u), y0f = std::floor(v);
     const float fx = u - x0f, fy = v - y0f;  // exact
     const int x0 = static_cast<int>(x0f), y0 = static_cast<int>(y0f);
+    const float value = sample(src, sw, sh, x0, y0, fx, fy);
+    out.data[i] = static_cast<uint8_t>(std::clamp(std::floor(value + 0.5f), 0.0f, 255.0f));
+  }
+  return out;
+}
+
+}  // namespace
+
+const char* remapInterpolationName(RemapInterpolation interpolation) {
+  return interpolation == RemapInterpolation::kBicubic ? "bicubic" : "bilinear";
+}
+
+Result<ImageU8> remapBilinear(const ImageU8& source, const RemapTable& table) {
+  const auto sample = [](const uint8_t* src, int sw, int sh, int x0, int y0, float fx, float fy) {
     const int x1 = std::min(x0 + 1, sw - 1), y1 = std::min(y0 + 1, sh - 1);
     const uint8_t* row0 = src + static_cast<size_t>(y0) * sw;
     const uint8_t* row1 = src + static_cast<size_t>(y1) * sw;
@@ -120,27 +133,13 @@ Result<ImageU8> remapBilinear(const ImageU8& source, const RemapTable& table) {
     const float a_w = gx * a, b_w = fx * b, c_w = gx * c, d_w = fx * d;
     const float top = a_w + b_w, bottom = c_w + d_w;
     const float top_w = gy * top, bottom_w = fy * bottom;
-    const float value = top_w + bottom_w;
-    out.data[i] = static_cast<uint8_t>(std::clamp(std::floor(value + 0.5f), 0.0f, 255.0f));
-  }
-  return out;
+    return top_w + bottom_w;
+  };
+  return remapEach("remapBilinear", source, table, sample);
 }
 
 Result<ImageU8> remapBicubic(const ImageU8& source, const RemapTable& table) {
-  VKLOC_TRY_STATUS(validateRemapTable(table));
-  VKLOC_TRY_STATUS(checkSource("remapBicubic", source, table));
-  const int sw = table.source_width, sh = table.source_height;
-  ImageU8 out(table.width, table.height, 1);
-  const float max_u = static_cast<float>(sw - 1), max_v = static_cast<float>(sh - 1);
-  const uint8_t* src = source.data.data();
-  const size_t n = out.data.size();
-  for (size_t i = 0; i < n; ++i) {
-    const float u = table.uv[2 * i], v = table.uv[2 * i + 1];
-    // Written so that NaN fails every comparison: NaN, +-inf and positions off the source give 0.
-    if (!(u >= 0.0f && u <= max_u && v >= 0.0f && v <= max_v)) continue;
-    const float x0f = std::floor(u), y0f = std::floor(v);
-    const float tx = u - x0f, ty = v - y0f;  // exact
-    const int x0 = static_cast<int>(x0f), y0 = static_cast<int>(y0f);
+  const auto sample = [](const uint8_t* src, int sw, int sh, int x0, int y0, float tx, float ty) {
     int xs[4];
     for (int k = 0; k < 4; ++k) xs[k] = std::clamp(x0 - 1 + k, 0, sw - 1);  // BORDER_REPLICATE
     float wx[4], wy[4];
@@ -153,10 +152,9 @@ Result<ImageU8> remapBicubic(const ImageU8& source, const RemapTable& table) {
       for (int j = 0; j < 4; ++j) p[j] = row[xs[j]];
       rows[k] = cubicSum(wx, p);
     }
-    const float value = cubicSum(wy, rows);
-    out.data[i] = static_cast<uint8_t>(std::clamp(std::floor(value + 0.5f), 0.0f, 255.0f));
-  }
-  return out;
+    return cubicSum(wy, rows);
+  };
+  return remapEach("remapBicubic", source, table, sample);
 }
 
 Result<ImageU8> remapImage(const ImageU8& source, const RemapTable& table, RemapInterpolation interpolation) {
