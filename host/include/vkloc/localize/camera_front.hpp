@@ -33,7 +33,7 @@ Result<ViewKind> parseViewKind(const std::string& name);
 struct ViewOptions {
   ViewKind kind = ViewKind::kUndistorted;
   /// Bicubic keeps edges sharper: measured on lenses applied to the development sequences, the
-  /// tracking error grows less than with bilinear (README, "Cameras and lenses").
+  /// tracking error grows less than with bilinear (README, "Lenses: undistorted and stabilised views").
   RemapInterpolation interpolation = RemapInterpolation::kBicubic;
   /// View size, pixels; 0: the lens image's size.
   int width = 0;
