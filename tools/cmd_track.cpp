@@ -434,7 +434,9 @@ void addTrackOptions(CLI::App* cmd, const std::shared_ptr<TrackArgs>& args) {
   args->camera.add(*cmd);
   args->view.add(*cmd);
   cmd->add_option("--motion", args->motion, "Pose prediction: constant-velocity | last-pose")->capture_default_str();
-  cmd->add_option("--max-frames", args->max_frames, "Track only the first N images (0 = all)")->capture_default_str();
+  cmd->add_option("--max-frames", args->max_frames, "Track only the first N images (0 = all)")
+      ->check(CLI::Range(0, 1000000000))
+      ->capture_default_str();
   cmd->add_option("--start-frame", args->start_frame,
                   "Start at this image, at its ground-truth pose with no velocity (0 = the sequence's start)")
       ->capture_default_str();

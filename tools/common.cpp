@@ -305,6 +305,14 @@ Pose initialPose(const Sequence& seq, const std::string& offset, size_t start_fr
   }
   if (!offset.empty()) {
     const auto v = take(parseNumbers(offset, "--init-offset (dx,dy,dz metres, rx,ry,rz degrees)", 6));
+    for (int k = 0; k < 6; ++k) {
+      const double limit = k < 3 ? 1e6 : 360.0;
+      if (!(std::abs(v[k]) <= limit)) {
+        static const char* const kNames[6] = {"dx", "dy", "dz", "rx", "ry", "rz"};
+        throw Failure{
+            fmt::format("--init-offset: {} = {} is outside +-{:g} {}", kNames[k], v[k], limit, k < 3 ? "m" : "deg")};
+      }
+    }
     Pose dR = Pose::Identity();
     dR.linear() = expSO3(Eigen::Vector3d(v[3], v[4], v[5]) * M_PI / 180.0);
     T = T * dR;

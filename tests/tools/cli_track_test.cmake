@@ -42,6 +42,9 @@ run_fails("bench live, bad frame" "--frame 99" bench live --sequence ${seq} --fr
 run_fails("missing sequence" "not|No such" track --sequence ${WORK}/nope --out ${WORK}/x.txt)
 run_fails("bad backend" "backend" track --sequence ${seq} --out ${WORK}/x.txt --backend gpu)
 run_fails("bad offset" "init-offset" track --sequence ${seq} --out ${WORK}/x.txt --init-offset 1,2)
+run_fails("huge offset rotation" "init-offset: rx = 1e\\+308 is outside" track --sequence ${seq} --out ${WORK}/x.txt
+          --init-offset 0,0,0,1e308,0,0)
+run_fails("negative frame count" "max-frames" track --sequence ${seq} --out ${WORK}/x.txt --max-frames -1)
 
 # A corrupt image in the middle: the run stops with the image's name; the previous run's files
 # at --out are untouched, and the frames tracked before are kept in "<file>.partial" (said so).

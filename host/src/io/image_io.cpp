@@ -2,11 +2,16 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
+#include <vector>
 
 #include "vkloc/core/atomic_file.hpp"
 #include "vkloc/core/text.hpp"
@@ -71,6 +76,32 @@ Status writeFloatTiff(const std::string& path, const ImageF32& image) {
   return writeEncoded(path, src, {cv::IMWRITE_TIFF_COMPRESSION, 1}, ".tiff");
 }
 
+namespace {
+
+/// Why an encoded JPEG or PNG is cut short (no end marker), or nothing for a complete one (and for
+/// other formats, which the decoder checks).
+std::optional<std::string> truncation(const std::vector<uint8_t>& b) {
+  const size_t n = b.size();
+  if (n >= 2 && b[0] == 0xFF && b[1] == 0xD8) {
+    // End of image FF D9 among the last bytes (writers may pad after it); inside the entropy-coded
+    // data FF is always followed by 00 or a restart marker, so a cut file has none there.
+    const size_t from = n > 64 ? n - 64 : 0;
+    for (size_t i = n - 1; i > from; --i) {
+      if (b[i - 1] == 0xFF && b[i] == 0xD9) return std::nullopt;
+    }
+    return std::string("truncated JPEG (no end-of-image marker)");
+  }
+  static const uint8_t kPng[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+  if (n >= 8 && std::equal(kPng, kPng + 8, b.begin())) {
+    // The IEND chunk closes every PNG: length 0, "IEND", CRC.
+    static const uint8_t kIend[4] = {'I', 'E', 'N', 'D'};
+    if (n < 20 || !std::equal(kIend, kIend + 4, b.end() - 8)) return std::string("truncated PNG (no IEND chunk)");
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 Result<ImageU8> readImageU8(const std::string& path, int channels) {
   if (channels != 1 && channels != 4) {
     return makeError(ErrorCode::kInvalidArgument, "readImageU8: channels must be 1 or 4");
@@ -79,9 +110,20 @@ Result<ImageU8> readImageU8(const std::string& path, int channels) {
   if (!std::filesystem::is_regular_file(path, ec)) {
     return makeError(ErrorCode::kNotFound, fmt::format("{}: image not found", path));
   }
+  std::vector<uint8_t> bytes;
+  {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return makeError(ErrorCode::kIoError, fmt::format("{}: cannot open the image", path));
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  // A truncated JPEG or PNG decodes into a partly grey image (libjpeg only warns): refused here,
+  // before the decoder prints its own line.
+  if (const std::optional<std::string> cut = truncation(bytes)) {
+    return makeError(ErrorCode::kMalformedInput, fmt::format("{}: {}", path, *cut));
+  }
   cv::Mat m;
   try {
-    m = cv::imread(path, channels == 1 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
+    m = cv::imdecode(bytes, channels == 1 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR);
   } catch (const cv::Exception&) {
   }
   if (m.empty()) return makeError(ErrorCode::kMalformedInput, fmt::format("{}: not a readable image", path));
