@@ -147,14 +147,10 @@ ViewOptions ViewArgs::options(const Sequence& seq) const {
 }
 
 SequenceView sequenceView(const SequenceCamera& camera, const ViewOptions& options) {
-  const LensCamera lens = take(lensCamera(camera));
   SequenceView out;
-  if (lens.isIdealPinhole() && options.kind == ViewKind::kUndistorted && options.width == 0 && options.hfov_deg == 0) {
-    out.camera = lens.intrinsics;
-    return out;
-  }
-  out.front = take(CameraFront::create(lens, options));
+  out.front = take(CameraFront::create(take(lensCamera(camera)), options));
   out.camera = out.front->view();
+  if (out.front->identity()) out.front.reset();  // the images are the view already
   return out;
 }
 

@@ -67,6 +67,10 @@ Result<std::unique_ptr<CameraFront>> CameraFront::create(const LensCamera& lens,
     front->view_ = PinholeCamera{f, f, 0.5 * (w - 1), 0.5 * (h - 1), w, h};
   }
   front->identity_ = keep_intrinsics && lens.isIdealPinhole();
+  if (front->identity_) {
+    front->valid_fraction_ = 1.0;
+    return front;
+  }
   // The view must mostly see through the lens, when their axes are aligned (a stabilised view
   // turns away from that as the camera does).
   (void)front->table(Eigen::Matrix3d::Identity());
@@ -205,11 +209,7 @@ const RemapTable& CameraFront::table(const Eigen::Matrix3d& R_camera_view) {
   valid_fraction_ = table_.uv.empty() ? 0.0 : static_cast<double>(valid) / static_cast<double>(table_.uv.size() / 2);
   maps_.reset();
   remapper_stale_ = true;
-  if (cached && !remapper_) {
-    maps_ = std::make_unique<Maps>();
-    const cv::Mat uv(table_.height, table_.width, CV_32FC2, table_.uv.data());
-    cv::convertMaps(uv, cv::Mat(), maps_->xy, maps_->fraction, CV_16SC2);
-  }
+  if (cached && !remapper_) buildMaps();
   return table_;
 }
 
@@ -256,11 +256,13 @@ void CameraFront::setRemapper(std::unique_ptr<ImageRemapper> remapper) {
   remapper_ = std::move(remapper);
   remapper_stale_ = true;
   // Without a device the cached table needs its OpenCV maps again.
-  if (!remapper_ && table_valid_ && options_.kind != ViewKind::kStabilised) {
-    maps_ = std::make_unique<Maps>();
-    const cv::Mat uv(table_.height, table_.width, CV_32FC2, table_.uv.data());
-    cv::convertMaps(uv, cv::Mat(), maps_->xy, maps_->fraction, CV_16SC2);
-  }
+  if (!remapper_ && table_valid_ && options_.kind != ViewKind::kStabilised) buildMaps();
+}
+
+void CameraFront::buildMaps() {
+  maps_ = std::make_unique<Maps>();
+  const cv::Mat uv(table_.height, table_.width, CV_32FC2, table_.uv.data());
+  cv::convertMaps(uv, cv::Mat(), maps_->xy, maps_->fraction, CV_16SC2);
 }
 
 std::string CameraFront::remapDescription() const {

@@ -698,13 +698,14 @@ struct Localizer::Impl {
     }
     lead = std::clamp(lead, std::min(1, options.max_keyframe_lead_frames), options.max_keyframe_lead_frames);
     const int64_t t_target = t_ns + lead * frame_interval_ns;
-    const std::optional<MotionPrediction> predicted = motion->predict(t_target);
-    Pose T_target = predicted ? predicted->T_world_camera : fallback;
-    if (predicted && front && front->options().kind == ViewKind::kStabilised) {
+    Pose T_target = fallback;
+    if (front && front->options().kind == ViewKind::kStabilised) {
       // The view the camera will have then: stabilised at the attitude predicted for then.
-      if (std::optional<MotionPrediction> at_target = view_prior->cameraPrior().predict(t_target)) {
-        T_target = at_target->T_world_camera * front->viewExtrinsic(at_target->T_world_camera);
+      if (std::optional<MotionPrediction> camera_then = view_prior->cameraPrior().predict(t_target)) {
+        T_target = camera_then->T_world_camera * front->viewExtrinsic(camera_then->T_world_camera);
       }
+    } else if (std::optional<MotionPrediction> predicted = motion->predict(t_target)) {
+      T_target = predicted->T_world_camera;
     }
     if (!keyframes->needsKeyframe(T_target)) return;
     KeyframeRequest request;

@@ -95,6 +95,7 @@ class CameraFront {
   CameraFront() = default;
   void fillGrid(const Eigen::Matrix3d& R_camera_view, int step, RemapTable& table) const;
   bool sourceOf(const Eigen::Matrix3d& R_camera_view, double u, double v, float& su, float& sv) const;
+  void buildMaps();  ///< maps_ from table_ (a cached table remapped by OpenCV).
 
   LensCamera lens_;
   PinholeCamera view_;
