@@ -7,6 +7,8 @@ set -euo pipefail
 PACKAGES=(
   # toolchain
   build-essential cmake ninja-build ccache pkg-config git clang-format
+  # fuzzing (libFuzzer ships in compiler-rt) and symbolised sanitizer reports
+  clang libclang-rt-dev llvm
   # Vulkan: loader + headers, lavapipe (CPU driver), validation layer, shader compilers
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
   glslc glslang-tools spirv-tools
