@@ -1,0 +1,41 @@
+// Pose and number-list strings of the command line (parsePose for --pose and T_world_model,
+// parseNumbers for --init-offset, --look-at, --intrinsics and the like): a parsed pose is rigid
+// and formatPose then parsePose gives it back to formatPose's 9 digits; parsed numbers are
+// finite; errors are one line naming the option.
+#include <string>
+
+#include "fuzz_common.hpp"
+#include "vkloc/core/pose.hpp"
+
+using namespace vkloc;
+using namespace vkloc::fuzz;
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+
+  const auto numbers = parseNumbers(text, "--opt", 0);
+  if (numbers.ok()) {
+    for (double v : *numbers) check(std::isfinite(v), "pose.numbers_finite", "non-finite number accepted");
+  } else {
+    checkErrorMessage(numbers.error(), "--opt", "pose");
+  }
+
+  const auto pose = parsePose(text);
+  if (!pose.ok()) {
+    checkErrorMessage(pose.error(), "pose", "pose");
+    return 0;
+  }
+  check(isValidPose(*pose), "pose.valid", "parsePose returned a non-rigid transform");
+  const std::string formatted = formatPose(*pose);
+  const auto again = parsePose(formatted);
+  check(again.ok(), "pose.roundtrip", again.ok() ? "" : again.error().message + " (" + formatted + ")");
+  if (!again.ok()) return 0;
+  // 9 significant digits: translations to 1e-8 relative, rotation entries to 1e-7.
+  for (int k = 0; k < 3; ++k) {
+    check(nearRelative(pose->translation()[k], again->translation()[k], 1e-8), "pose.roundtrip",
+          "translation differs: " + formatted);
+  }
+  const double dR = (pose->linear() - again->linear()).cwiseAbs().maxCoeff();
+  check(dR <= 1e-7, "pose.roundtrip", "rotation differs by " + std::to_string(dR) + ": " + formatted);
+  return 0;
+}

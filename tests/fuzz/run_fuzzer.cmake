@@ -1,0 +1,15 @@
+# One bounded libFuzzer run for ctest: cmake -DFUZZER=exe -DSEEDS=dir -DWORK=dir -DSECONDS=n
+#   -DMAX_LEN=bytes -DTIMEOUT=s -DRSS_MB=mb [-DDICT=file] -P run_fuzzer.cmake
+# New inputs go to WORK/corpus (kept between runs); the seed folder is only read. A crash, leak,
+# timeout, out-of-memory or violated property fails the test and leaves the input in WORK.
+file(MAKE_DIRECTORY ${WORK}/corpus)
+set(args ${WORK}/corpus ${SEEDS} -max_total_time=${SECONDS} -timeout=${TIMEOUT} -rss_limit_mb=${RSS_MB}
+  -max_len=${MAX_LEN} -artifact_prefix=${WORK}/ -print_final_stats=1)
+if(DICT)
+  list(APPEND args -dict=${DICT})
+endif()
+execute_process(COMMAND ${FUZZER} ${args} RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  file(GLOB found ${WORK}/crash-* ${WORK}/leak-* ${WORK}/timeout-* ${WORK}/oom-* ${WORK}/slow-unit-*)
+  message(FATAL_ERROR "${FUZZER} failed (${rc}); inputs: ${found}")
+endif()
