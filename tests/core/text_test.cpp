@@ -7,6 +7,9 @@
 #include <cstdint>
 #include <limits>
 #include <random>
+#include <string_view>
+#include <utility>
+#include <vector>
 
 #include "support/test_support.hpp"
 
@@ -122,6 +125,43 @@ TEST(Text, ReadFileReportsMissingFoldersAndSize) {
   auto big = text::readFile(dir.file("a.txt"), "test file", 3);
   ASSERT_FALSE(big.ok());
   EXPECT_EQ(big.error().code, ErrorCode::kMalformedInput);
+  EXPECT_NE(big.error().message.find("test file is larger than 3 bytes"), std::string::npos) << big.error().message;
+}
+
+TEST(Text, LineCursorWalksLinesWithTheirNumbers) {
+  text::LineCursor cursor("a\nb\r\n\nc");
+  std::vector<std::pair<size_t, std::string>> seen;
+  for (std::string_view line; cursor.next(line);) seen.emplace_back(cursor.number(), std::string(line));
+  ASSERT_EQ(seen.size(), 4u);
+  EXPECT_EQ(seen[1], (std::pair<size_t, std::string>{2, "b\r"}));
+  EXPECT_EQ(seen[2], (std::pair<size_t, std::string>{3, ""}));
+  EXPECT_EQ(seen[3], (std::pair<size_t, std::string>{4, "c"}));
+  std::string_view line;
+  EXPECT_FALSE(text::LineCursor("").next(line));
+}
+
+TEST(Text, InvalidUtf8OffsetFindsTheFirstBadByte) {
+  EXPECT_EQ(text::invalidUtf8Offset("plain ascii"), std::string::npos);
+  EXPECT_EQ(text::invalidUtf8Offset("caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x98\x80"), std::string::npos);
+  EXPECT_EQ(text::invalidUtf8Offset("ab\xff"), 2u);            // Never valid.
+  EXPECT_EQ(text::invalidUtf8Offset("ab\xc3"), 2u);            // Cut short.
+  EXPECT_EQ(text::invalidUtf8Offset("\xc0\xaf"), 0u);          // Overlong '/'.
+  EXPECT_EQ(text::invalidUtf8Offset("x\xed\xa0\x80"), 1u);     // UTF-16 surrogate.
+  EXPECT_EQ(text::invalidUtf8Offset("\xf4\x90\x80\x80"), 0u);  // Above U+10FFFF.
+  EXPECT_EQ(text::invalidUtf8Offset("a\xe2\x82"), 1u);
+}
+
+TEST(Text, LineErrorsNeverCarryControlCharacters) {
+  // A message quoting file content (or a library's message) with NUL, line breaks and an
+  // escape sequence stays one printable line.
+  const char raw[] = "bad \0 byte\nnext line\r\x1b[31m red";
+  const std::string quoted(raw, sizeof raw - 1);
+  const Error e = text::lineError("dir/cam\nera.yaml", 3, "not valid YAML: " + quoted);
+  EXPECT_EQ(e.code, ErrorCode::kMalformedInput);
+  for (const char c : e.message) {
+    EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 || c == 0x7f) << e.message;
+  }
+  EXPECT_EQ(e.message, "dir/cam era.yaml:3: not valid YAML: bad \\x00 byte next line \\x1b[31m red");
 }
 
 }  // namespace

@@ -34,6 +34,40 @@ std::vector<std::string_view> splitLines(std::string_view text) {
   return lines;
 }
 
+size_t invalidUtf8Offset(std::string_view s) {
+  size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    if (c < 0x80) {
+      ++i;
+      continue;
+    }
+    size_t n = 0;         // Continuation bytes.
+    uint32_t low = 0x80;  // Bounds of the second byte (rules out overlong forms and surrogates).
+    uint32_t high = 0xbf;
+    if (c >= 0xc2 && c <= 0xdf) {
+      n = 1;
+    } else if (c >= 0xe0 && c <= 0xef) {
+      n = 2;
+      if (c == 0xe0) low = 0xa0;
+      if (c == 0xed) high = 0x9f;
+    } else if (c >= 0xf0 && c <= 0xf4) {
+      n = 3;
+      if (c == 0xf0) low = 0x90;
+      if (c == 0xf4) high = 0x8f;
+    } else {
+      return i;
+    }
+    if (n >= s.size() - i) return i;  // Cut short.
+    for (size_t k = 1; k <= n; ++k) {
+      const auto b = static_cast<unsigned char>(s[i + k]);
+      if (k == 1 ? (b < low || b > high) : (b < 0x80 || b > 0xbf)) return i;
+    }
+    i += n + 1;
+  }
+  return std::string_view::npos;
+}
+
 std::vector<std::string_view> splitFields(std::string_view line, bool commas_too) {
   std::vector<std::string_view> fields;
   size_t i = 0;
@@ -251,6 +285,10 @@ Result<std::string> readFile(const std::string& path, const char* what, uint64_t
   if (fs::is_directory(status)) {
     return makeError(ErrorCode::kNotFound, cat(path, ": ", what, " not found (this is a folder)"));
   }
+  const uintmax_t size = fs::is_regular_file(status) ? fs::file_size(path, ec) : 0;
+  if (!ec && size > max_bytes) {
+    return makeError(ErrorCode::kMalformedInput, cat(path, ": ", what, " is larger than ", max_bytes, " bytes"));
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) return makeError(ErrorCode::kIoError, cat(path, ": cannot open ", what));
   std::string content;
@@ -268,7 +306,7 @@ Result<std::string> readFile(const std::string& path, const char* what, uint64_t
 }
 
 Error lineError(const std::string& path, size_t line, const std::string& what) {
-  return makeError(ErrorCode::kMalformedInput, cat(path, ":", line, ": ", what));
+  return makeError(ErrorCode::kMalformedInput, oneLine(cat(path, ":", line, ": ", what)));
 }
 
 }  // namespace vkloc::text

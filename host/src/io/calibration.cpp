@@ -2,12 +2,14 @@
 #include "vkloc/io/calibration.hpp"
 
 #include <fmt/format.h>
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <sstream>
 
 #include "io/io_internal.hpp"
 #include "vkloc/core/atomic_file.hpp"
@@ -17,6 +19,49 @@ namespace vkloc {
 using namespace io_detail;
 
 namespace {
+
+/// Finds the first quoted scalar of a YAML text that is never closed (yaml-cpp's scanner takes
+/// the end of the text as the closing quote when a line break precedes it).
+class QuoteChecker : public YAML::EventHandler {
+ public:
+  explicit QuoteChecker(const std::string& text) : text_(text) {}
+  size_t line = 0;  ///< 1-based line of the opening quote, 0 when every quote is closed.
+
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t, const std::string&) override {
+    if (line != 0 || mark.pos < 0) return;
+    size_t i = static_cast<size_t>(mark.pos);
+    // Skip node properties (a tag "!..." and an anchor "&..."), which the mark includes.
+    while (i < text_.size() && (text_[i] == '!' || text_[i] == '&')) {
+      while (i < text_.size() && !std::isspace(static_cast<unsigned char>(text_[i]))) ++i;
+      while (i < text_.size() && std::isspace(static_cast<unsigned char>(text_[i]))) ++i;
+    }
+    if (i >= text_.size() || (text_[i] != '"' && text_[i] != '\'')) return;
+    const char quote = text_[i];
+    for (size_t k = i + 1; k < text_.size(); ++k) {
+      if (quote == '"' && text_[k] == '\\') {
+        ++k;  // An escape: the next byte is not the closing quote.
+      } else if (text_[k] == quote) {
+        if (quote == '\'' && k + 1 < text_.size() && text_[k + 1] == '\'') {
+          ++k;  // '' inside single quotes is one quote.
+        } else {
+          return;
+        }
+      }
+    }
+    line = static_cast<size_t>(mark.line + 1);
+  }
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+
+ private:
+  const std::string& text_;
+};
 
 /// Number of distortion coefficients a model accepts.
 bool distortionCountOk(const std::string& model, size_t n) {
@@ -234,8 +279,40 @@ Result<SequenceCamera> io_detail::readSequenceCamera(const std::string& path, co
     }
     return camera;
   } catch (const YAML::Exception& e) {
-    return lineError(path, static_cast<size_t>(e.mark.line + 1), fmt::format("invalid camera file: {}", e.msg));
+    return lineError(path, static_cast<size_t>(e.mark.line + 1), "invalid camera file: " + text::oneLine(e.msg));
   }
+}
+
+size_t io_detail::unterminatedYamlQuote(const std::string& text) {
+  std::istringstream in(text);
+  YAML::Parser parser(in);
+  QuoteChecker checker(text);
+  parser.HandleNextDocument(checker);  // The first document, the one YAML::Load reads.
+  return checker.line;
+}
+
+Result<YAML::Node> io_detail::parseYaml(const std::string& path, const std::string& text) {
+  try {
+    if (const size_t line = unterminatedYamlQuote(text); line != 0) {
+      return lineError(path, line, "not valid YAML: a quoted string opened here is never closed");
+    }
+    return YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    return lineError(path, static_cast<size_t>(e.mark.line + 1), "not valid YAML: " + text::oneLine(e.msg));
+  } catch (const std::exception& e) {
+    return makeError(ErrorCode::kMalformedInput, text::oneLine(fmt::format("{}: not valid YAML: {}", path, e.what())));
+  }
+}
+
+Result<YAML::Node> io_detail::loadYaml(const std::string& path, const char* what) {
+  auto text = text::readFile(path, what, kMaxYamlBytes);
+  if (!text.ok()) return text.error();
+  auto root = parseYaml(path, *text);
+  if (!root.ok()) return root.error();
+  if (!root->IsMap()) {
+    return makeError(ErrorCode::kMalformedInput, fmt::format("{}:1: expected a mapping of {} keys", path, what));
+  }
+  return root;
 }
 
 Result<SequenceCamera> loadSequenceCamera(const std::string& path) {
@@ -254,12 +331,11 @@ Result<PinholeCamera> loadCamera(const std::string& path) {
   if (!std::filesystem::is_regular_file(path, ec)) {
     return makeError(ErrorCode::kNotFound, fmt::format("{}: camera file not found", path));
   }
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);  // JSON is a subset of YAML.
-  } catch (const std::exception& e) {
-    return makeError(ErrorCode::kMalformedInput, fmt::format("{}: not valid YAML/JSON: {}", path, e.what()));
-  }
+  auto text = text::readFile(path, "camera file", kMaxYamlBytes);
+  if (!text.ok()) return text.error();
+  auto parsed = parseYaml(path, *text);  // JSON is a subset of YAML.
+  if (!parsed.ok()) return parsed.error();
+  const YAML::Node root = *parsed;
   if (!root.IsMap()) {
     return makeError(ErrorCode::kMalformedInput, fmt::format("{}: expected a mapping of camera fields", path));
   }

@@ -660,7 +660,8 @@ struct ColmapLine {
 
 /// True when the first data line reads "<id> <MODEL> <width> <height> ...".
 bool looksLikeColmap(std::string_view content) {
-  for (std::string_view line : text::splitLines(content)) {
+  text::LineCursor lines(content);
+  for (std::string_view line; lines.next(line);) {
     if (text::isBlankOrComment(line)) continue;
     const std::vector<std::string_view> f = text::splitFields(line);
     if (f.size() < 4 || !allDigits(f[0]) || !allDigits(f[2]) || !allDigits(f[3])) return false;
@@ -735,13 +736,17 @@ Result<SequenceCamera> colmapCamera(const Where& w, const ColmapLine& c) {
 
 Result<SequenceCamera> readColmap(const std::string& path, const std::string& content, const std::string& select) {
   std::vector<ColmapLine> cameras;
-  const std::vector<std::string_view> lines = text::splitLines(content);
-  for (size_t i = 0; i < lines.size(); ++i) {
-    if (text::isBlankOrComment(lines[i])) continue;
-    const std::vector<std::string_view> f = text::splitFields(lines[i]);
-    const Where w{path, "", i + 1};
+  std::map<uint64_t, size_t> line_of_id;
+  text::LineCursor lines(content);
+  for (std::string_view line; lines.next(line);) {
+    if (text::isBlankOrComment(line)) continue;
+    const Where w{path, "", lines.number()};
+    if (const std::string wrong = tableLimits(line, cameras.size()); !wrong.empty()) {
+      return w.error(ErrorCode::kMalformedInput, wrong);
+    }
+    const std::vector<std::string_view> f = text::splitFields(line);
     ColmapLine c;
-    c.line = i + 1;
+    c.line = lines.number();
     if (f.size() < 4) {
       return w.error(ErrorCode::kMalformedInput,
                      fmt::format("expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS..., got {} fields", f.size()));
@@ -760,10 +765,8 @@ Result<SequenceCamera> readColmap(const std::string& path, const std::string& co
       if (const std::string wrong = text::parseDouble(f[j], v); !wrong.empty()) return w.field("PARAMS", wrong);
       c.params.push_back(v);
     }
-    for (const ColmapLine& other : cameras) {
-      if (other.id == c.id) {
-        return w.field("CAMERA_ID", fmt::format("camera {} is listed twice (also line {})", c.id, other.line));
-      }
+    if (const auto [other, added] = line_of_id.emplace(c.id, c.line); !added) {
+      return w.field("CAMERA_ID", fmt::format("camera {} is listed twice (also line {})", c.id, other->second));
     }
     cameras.push_back(std::move(c));
   }
@@ -799,18 +802,17 @@ std::string withoutOpenCvMarks(std::string content) {
 }
 
 Result<SequenceCamera> loadCalibrationUnguarded(const std::string& path, const std::string& select) {
-  auto read = text::readFile(path, "calibration file", uint64_t{1} << 26);
+  auto read = text::readFile(path, "calibration file", kMaxTableBytes);
   if (!read.ok()) return read.error();
   const std::string& content = *read;
   if (looksLikeColmap(content)) return readColmap(path, content, select);
-
-  YAML::Node loaded;
-  try {
-    loaded = YAML::Load(withoutOpenCvMarks(content));
-  } catch (const YAML::Exception& e) {
-    return lineError(path, static_cast<size_t>(e.mark.line + 1), text::oneLine("not valid YAML: " + e.msg));
+  if (content.size() > kMaxYamlBytes) {
+    return makeError(ErrorCode::kMalformedInput,
+                     fmt::format("{}: calibration file is larger than {} bytes (the YAML limit)", path, kMaxYamlBytes));
   }
-  const YAML::Node& root = loaded;  // const: looking a key up must not add it.
+  auto parsed = parseYaml(path, withoutOpenCvMarks(content));
+  if (!parsed.ok()) return parsed.error();
+  const YAML::Node& root = *parsed;  // const: looking a key up must not add it.
   constexpr const char* kFormats =
       "expected vkloc camera.yaml, Kalibr camchain.yaml or sensor.yaml, OpenCV or ROS camera YAML, CamOdoCal YAML or "
       "COLMAP cameras.txt";
@@ -842,14 +844,11 @@ Result<SequenceCamera> loadCalibrationUnguarded(const std::string& path, const s
 
 Result<SequenceCamera> io_detail::loadKalibrSensorCamera(const std::string& path) {
   try {
-    auto read = text::readFile(path, "camera file", uint64_t{1} << 26);
+    auto read = text::readFile(path, "camera file", kMaxYamlBytes);
     if (!read.ok()) return read.error();
-    YAML::Node loaded;
-    try {
-      loaded = YAML::Load(withoutOpenCvMarks(*read));
-    } catch (const YAML::Exception& e) {
-      return lineError(path, static_cast<size_t>(e.mark.line + 1), text::oneLine("not valid YAML: " + e.msg));
-    }
+    auto parsed = parseYaml(path, withoutOpenCvMarks(*read));
+    if (!parsed.ok()) return parsed.error();
+    const YAML::Node loaded = *parsed;
     if (!loaded.IsMap()) return lineError(path, 1, "expected a mapping of sensor keys");
     return readKalibrCamera(Where{path, ""}, loaded);
   } catch (const std::exception& e) {

@@ -34,7 +34,7 @@ bool parseFinite(std::string_view t, double& out) { return text::parseDouble(t, 
 /// (line number, fields). kNotFound when the file is missing.
 Result<std::vector<std::pair<size_t, std::vector<std::string_view>>>> readCsv(const std::string& path,
                                                                               std::string& storage) {
-  auto read = text::readFile(path, "file");
+  auto read = io_detail::readTable(path, "file");
   if (!read.ok()) return read.error();
   storage = std::move(read).value();
   std::vector<std::pair<size_t, std::vector<std::string_view>>> rows;
@@ -48,6 +48,9 @@ Result<std::vector<std::pair<size_t, std::vector<std::string_view>>>> readCsv(co
     const std::string_view line = trim(text.substr(start, end - start));
     start = end + 1;
     if (line.empty() || line.front() == '#') continue;
+    if (const std::string wrong = io_detail::tableLimits(line, rows.size()); !wrong.empty()) {
+      return lineError(path, line_no, wrong);
+    }
     rows.emplace_back(line_no, splitCsv(line));
   }
   return rows;
@@ -110,18 +113,15 @@ double yamlNumber(const YAML::Node& node, const char* key) {
 }
 
 Result<YAML::Node> loadYamlFile(const std::string& path) {
-  Result<std::string> read = text::readFile(path, "file");
+  Result<std::string> read = text::readFile(path, "file", io_detail::kMaxYamlBytes);
   if (!read.ok()) return read.error();
   std::string text = std::move(read).value();
   // OpenCV-style files start with "%YAML:1.0", which is not a valid YAML directive.
   if (text.rfind("%YAML:", 0) == 0) text[0] = '#';
-  try {
-    YAML::Node root = YAML::Load(text);
-    if (!root.IsMap()) return lineError(path, 1, "expected a mapping of sensor keys");
-    return root;
-  } catch (const YAML::Exception& e) {
-    return lineError(path, static_cast<size_t>(e.mark.line + 1), fmt::format("not valid YAML: {}", e.msg));
-  }
+  auto root = io_detail::parseYaml(path, text);
+  if (!root.ok()) return root.error();
+  if (!root->IsMap()) return lineError(path, 1, "expected a mapping of sensor keys");
+  return root;
 }
 
 Result<ImuNoise> loadEurocImuNoise(const std::string& path) {

@@ -33,21 +33,43 @@ inline bool finitePose(const Pose& T) { return isValidPose(T); }
 
 inline size_t yamlLine(const YAML::Node& node) { return static_cast<size_t>(node.Mark().line + 1); }
 
-inline Result<YAML::Node> loadYaml(const std::string& path, const char* what) {
-  auto text = text::readFile(path, what);
-  if (!text.ok()) return text.error();
-  try {
-    YAML::Node root = YAML::Load(*text);
-    if (!root.IsMap()) {
-      return makeError(ErrorCode::kMalformedInput, fmt::format("{}:1: expected a mapping of {} keys", path, what));
-    }
-    return root;
-  } catch (const YAML::Exception& e) {
-    return lineError(path, static_cast<size_t>(e.mark.line + 1), fmt::format("not valid YAML: {}", e.msg));
-  } catch (const std::exception& e) {
-    return makeError(ErrorCode::kMalformedInput, fmt::format("{}: not valid YAML: {}", path, e.what()));
-  }
+// ---------------------------------------------------------------------------------------------
+// Limits that keep reading time and memory linear in the input (README, "Sequences").
+
+/// Largest YAML file (sequence.yaml, camera.yaml, calibration and sensor YAML), bytes. Real
+/// ones are a few KiB (an OpenCV calibration with every view's corners ~100 KiB); yaml-cpp
+/// spends ~15 us and ~500 bytes per node, so 1 MiB of "[0,0,...]" takes ~7 s and ~250 MB.
+constexpr uint64_t kMaxYamlBytes = uint64_t{1} << 20;
+/// Largest table file (images.txt, groundtruth.txt and other TUM trajectories, imu.csv,
+/// prior.csv, import CSVs, COLMAP cameras.txt), bytes: 2.6 h of 200 Hz IMU at ~140 bytes a line.
+constexpr uint64_t kMaxTableBytes = uint64_t{1} << 28;
+/// Longest line of a table, bytes (a path is at most 4096 bytes on Linux).
+constexpr size_t kMaxLineBytes = size_t{1} << 16;
+/// Most entries (images, poses, samples, cameras) in one table: 9.7 days of 20 Hz images.
+constexpr size_t kMaxTableEntries = size_t{1} << 24;
+
+/// Reads a table file within kMaxTableBytes.
+inline Result<std::string> readTable(const std::string& path, const char* what) {
+  return text::readFile(path, what, kMaxTableBytes);
 }
+
+/// Line and entry limits of a table; empty string or what is wrong (for lineError).
+inline std::string tableLimits(std::string_view line, size_t entries) {
+  if (line.size() > kMaxLineBytes) return fmt::format("line is longer than {} bytes", kMaxLineBytes);
+  if (entries >= kMaxTableEntries) return fmt::format("more than {} entries", kMaxTableEntries);
+  return {};
+}
+
+/// Quoted scalars that run to the end of the text: yaml-cpp accepts `fx: "500` followed by a
+/// line break as the string "500 ". Returns the 1-based line of the first one, or 0.
+size_t unterminatedYamlQuote(const std::string& text);
+
+/// Parses YAML text (path for messages): kMalformedInput "path:line: not valid YAML: ..." with
+/// yaml-cpp's message made printable, an unterminated quoted string refused.
+Result<YAML::Node> parseYaml(const std::string& path, const std::string& text);
+
+/// Reads (within kMaxYamlBytes) and parses a YAML file whose root must be a mapping.
+Result<YAML::Node> loadYaml(const std::string& path, const char* what);
 
 inline Result<double> yamlDouble(const std::string& path, const YAML::Node& node, const char* key) {
   if (!node.IsScalar()) return lineError(path, yamlLine(node), fmt::format("'{}' must be a number", key));

@@ -32,7 +32,6 @@ using text::isBlankOrComment;
 using text::parseDouble;
 using text::parseSecondsToNs;
 using text::splitCsv;
-using text::splitLines;
 
 // ---------------------------------------------------------------------------------------------
 // Text helpers.
@@ -84,15 +83,17 @@ struct CsvRow {
 };
 
 Result<std::vector<CsvRow>> loadNsCsv(const std::string& path, const char* what, size_t value_columns) {
-  auto text = text::readFile(path, what);
+  auto text = readTable(path, what);
   if (!text.ok()) return text.error();
-  const std::vector<std::string_view> lines = splitLines(*text);
+  text::LineCursor lines(*text);
   std::vector<CsvRow> rows;
   bool seen_data = false;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    const size_t line_no = i + 1;
-    if (isBlankOrComment(lines[i])) continue;
-    const std::vector<std::string_view> fields = splitCsv(lines[i]);
+  for (std::string_view line; lines.next(line);) {
+    const size_t line_no = lines.number();
+    if (isBlankOrComment(line)) continue;
+    if (const std::string wrong = tableLimits(line, rows.size()); !wrong.empty())
+      return lineError(path, line_no, wrong);
+    const std::vector<std::string_view> fields = splitCsv(line);
     if (!seen_data) {
       seen_data = true;
       // An optional header line: column names, none of which is a number.
@@ -163,6 +164,23 @@ std::string priorText(const std::vector<PositionPrior>& priors) {
 
 // Validation before writing.
 
+/// What makes an images.txt path unusable (empty when nothing): one rule for load and save.
+std::string imagePathProblem(const std::string& p) {
+  if (p.empty() || trim(p) != std::string_view(p) || p.find_first_of("\n\r") != std::string::npos || p.front() == '#') {
+    return fmt::format("image path {} is empty, starts with '#' or has surrounding or line-break whitespace", shown(p));
+  }
+  return {};
+}
+
+/// A name or path written into sequence.yaml: YAML is UTF-8, and the emitter would replace
+/// other bytes, so they are refused rather than changed.
+Status checkUtf8(const std::string& value, const char* key, const std::string& what) {
+  const size_t bad = text::invalidUtf8Offset(value);
+  if (bad == std::string::npos) return Status::success();
+  return invalid(fmt::format("{}: {} {} is not valid UTF-8 (byte 0x{:02x} at offset {}); YAML cannot hold it", what,
+                             key, shown(value), static_cast<unsigned char>(value[bad]), bad));
+}
+
 Status validateTrajectory(const std::vector<StampedPose>& poses, const std::string& what) {
   for (size_t i = 0; i < poses.size(); ++i) {
     VKLOC_TRY_STATUS(checkIncreasingForSave(what, i, i > 0, i > 0 ? poses[i - 1].t_ns : 0, poses[i].t_ns));
@@ -176,13 +194,8 @@ Status validateTrajectory(const std::vector<StampedPose>& poses, const std::stri
 Status validateImages(const std::vector<ImageEntry>& images, const std::string& what) {
   for (size_t i = 0; i < images.size(); ++i) {
     VKLOC_TRY_STATUS(checkIncreasingForSave(what, i, i > 0, i > 0 ? images[i - 1].t_ns : 0, images[i].t_ns));
-    const std::string& p = images[i].path;
-    if (p.empty() || trim(p) != std::string_view(p) || p.find_first_of("\n\r") != std::string::npos ||
-        p.front() == '#') {
-      return invalid(
-          fmt::format("{}: entry {}: image path {} is empty, starts with '#' or has surrounding or line-break "
-                      "whitespace",
-                      what, i, shown(p)));
+    if (const std::string bad = imagePathProblem(images[i].path); !bad.empty()) {
+      return invalid(fmt::format("{}: entry {}: {}", what, i, bad));
     }
   }
   return Status::success();
@@ -239,14 +252,16 @@ std::string Sequence::modelPath() const {
 // groundtruth.txt
 
 Result<std::vector<StampedPose>> loadTumTrajectory(const std::string& path) {
-  auto text = text::readFile(path, "trajectory file");
+  auto text = readTable(path, "trajectory file");
   if (!text.ok()) return text.error();
-  const std::vector<std::string_view> lines = splitLines(*text);
+  text::LineCursor lines(*text);
   std::vector<StampedPose> poses;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    const size_t line_no = i + 1;
-    if (isBlankOrComment(lines[i])) continue;
-    const std::vector<std::string_view> f = text::splitFields(lines[i], true);
+  for (std::string_view line; lines.next(line);) {
+    const size_t line_no = lines.number();
+    if (isBlankOrComment(line)) continue;
+    if (const std::string wrong = tableLimits(line, poses.size()); !wrong.empty())
+      return lineError(path, line_no, wrong);
+    const std::vector<std::string_view> f = text::splitFields(line, true);
     if (f.size() != 8) {
       return lineError(path, line_no, fmt::format("expected 8 columns (t tx ty tz qx qy qz qw), got {}", f.size()));
     }
@@ -279,14 +294,16 @@ Status saveTumTrajectory(const std::vector<StampedPose>& poses, const std::strin
 // images.txt
 
 Result<std::vector<ImageEntry>> loadImageList(const std::string& path) {
-  auto text = text::readFile(path, "image list");
+  auto text = readTable(path, "image list");
   if (!text.ok()) return text.error();
-  const std::vector<std::string_view> lines = splitLines(*text);
+  text::LineCursor lines(*text);
   std::vector<ImageEntry> images;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    const size_t line_no = i + 1;
-    if (isBlankOrComment(lines[i])) continue;
-    const std::string_view line = trim(lines[i]);
+  for (std::string_view raw; lines.next(raw);) {
+    const size_t line_no = lines.number();
+    if (isBlankOrComment(raw)) continue;
+    if (const std::string wrong = tableLimits(raw, images.size()); !wrong.empty())
+      return lineError(path, line_no, wrong);
+    const std::string_view line = trim(raw);
     const size_t split = line.find_first_of(" \t");
     if (split == std::string_view::npos) {
       return lineError(path, line_no, "expected 2 columns (timestamp_s path), got 1");
@@ -295,6 +312,8 @@ Result<std::vector<ImageEntry>> loadImageList(const std::string& path) {
     std::string wrong = parseSecondsToNs(line.substr(0, split), e.t_ns);
     if (!wrong.empty()) return lineError(path, line_no, wrong);
     e.path = std::string(trim(line.substr(split)));
+    // The paths saveImageList refuses are refused here too, so that load and save agree.
+    if (const std::string bad = imagePathProblem(e.path); !bad.empty()) return lineError(path, line_no, bad);
     wrong = checkIncreasing(!images.empty(), images.empty() ? 0 : images.back().t_ns, e.t_ns, true);
     if (!wrong.empty()) return lineError(path, line_no, wrong);
     images.push_back(std::move(e));
@@ -431,7 +450,7 @@ Result<Sequence> loadSequence(const std::string& directory) {
       seq.imu_noise = noise;
     }
   } catch (const YAML::Exception& e) {
-    return lineError(yaml_path, static_cast<size_t>(e.mark.line + 1), fmt::format("invalid sequence file: {}", e.msg));
+    return lineError(yaml_path, static_cast<size_t>(e.mark.line + 1), "invalid sequence file: " + text::oneLine(e.msg));
   }
 
   auto camera = loadSequenceCamera((dir / "camera.yaml").string());
@@ -480,6 +499,8 @@ Status saveSequence(const Sequence& seq, const std::string& directory) {
     return invalid(fmt::format("{}: non-finite initial_velocity_world", yaml_path));
   }
   if (seq.imu_noise) VKLOC_TRY_STATUS(validateNoise(*seq.imu_noise, yaml_path));
+  VKLOC_TRY_STATUS(checkUtf8(seq.name, "name", yaml_path));
+  VKLOC_TRY_STATUS(checkUtf8(seq.model, "model", yaml_path));
   const std::string name = yamlQuoted(seq.name);
   const std::string model = yamlQuoted(seq.model);
   if (name.empty() || model.empty()) return invalid(fmt::format("{}: name or model is not valid text", yaml_path));

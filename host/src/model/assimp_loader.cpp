@@ -124,10 +124,14 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes, std:
     if (kind >= 0 && kind < 3) ++total[kind];
     return true;
   });
+  if (total[0] > kMaxModelElements) {
+    return fileError(ErrorCode::kUnsupported, path,
+                     fmt::format("{} vertices, more than the {} allowed", total[0], kMaxModelElements));
+  }
   static const char* const kKinds[3] = {"vertex", "texture coordinate", "normal"};
   static const char* const kPlurals[3] = {"vertices", "texture coordinates", "normals"};
   uint64_t seen[3] = {0, 0, 0};
-  uint64_t element = 0, faces = 0;
+  uint64_t element = 0, faces = 0, triangles = 0;
   Status status;
   const fs::path dir = fs::path(path).parent_path();
   forEachObjLine(text, [&](size_t line_number, std::string_view line) {
@@ -189,6 +193,18 @@ Status checkObj(const std::string& path, const std::vector<uint8_t>& bytes, std:
       status = fileError(ErrorCode::kMalformedInput, path,
                          fmt::format("{} {} (line {}) has {} vertices, fewer than {}", what, element, line_number,
                                      t.size() - 1, needed));
+      return false;
+    }
+    if (type == 'f' && t.size() - 1 > kMaxPolygonVertices) {
+      status = fileError(ErrorCode::kUnsupported, path,
+                         fmt::format("face {} (line {}) has {} vertices, more than the {} allowed in one polygon",
+                                     element, line_number, t.size() - 1, kMaxPolygonVertices));
+      return false;
+    }
+    triangles += type == 'f' ? t.size() - 3 : 0;
+    if (triangles > kMaxModelElements) {
+      status = fileError(ErrorCode::kUnsupported, path,
+                         fmt::format("more than {} triangles (at line {})", kMaxModelElements, line_number));
       return false;
     }
     for (size_t i = 1; i < t.size(); ++i) {
@@ -471,6 +487,11 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
                            fmt::format("{} {} has a list of {} values", e.name, i, length));
         }
         const bool indices = is_face && (p.name == "vertex_indices" || p.name == "vertex_index");
+        if (indices && length > static_cast<double>(kMaxPolygonVertices)) {
+          return fileError(ErrorCode::kUnsupported, path,
+                           fmt::format("face {} has {} vertices, more than the {} allowed in one polygon", i, length,
+                                       kMaxPolygonVertices));
+        }
         for (double k = 0; k < length; ++k) {
           if (!reader.next(p.type, value)) return truncated_property();
           if (indices && !(value >= 0 && value < static_cast<double>(vertex->count))) {
@@ -485,6 +506,13 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
                          fmt::format("vertex {} has non-finite position ({}, {}, {})", i, static_cast<float>(xyz[0]),
                                      static_cast<float>(xyz[1]), static_cast<float>(xyz[2])));
       }
+    }
+  }
+  // Counts are checked once the data is known to be there (a lying header is malformed).
+  for (const PlyElement& e : elements) {
+    if ((e.name == "vertex" || e.name == "face") && e.count > kMaxModelElements) {
+      return fileError(ErrorCode::kUnsupported, path,
+                       fmt::format("{} {} elements, more than the {} allowed", e.count, e.name, kMaxModelElements));
     }
   }
   return Status::success();
@@ -690,6 +718,21 @@ class SceneConverter {
   std::map<std::string, int> cache_;
 };
 
+// Refuses polygons of more than kMaxPolygonVertices corners in an imported, untriangulated scene.
+Status checkPolygonSizes(const std::string& path, const aiScene& scene) {
+  for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh* mesh = scene.mMeshes[m];
+    for (unsigned f = 0; mesh && mesh->mFaces && f < mesh->mNumFaces; ++f) {
+      if (mesh->mFaces[f].mNumIndices > kMaxPolygonVertices) {
+        return fileError(ErrorCode::kUnsupported, path,
+                         fmt::format("mesh {} face {} has {} vertices, more than the {} allowed in one polygon", m, f,
+                                     mesh->mFaces[f].mNumIndices, kMaxPolygonVertices));
+      }
+    }
+  }
+  return Status::success();
+}
+
 }  // namespace
 
 bool assimpReadsExtension(const std::string& ext) {
@@ -713,12 +756,15 @@ Result<Model> loadWithAssimp(const std::string& path, const std::string& ext, st
   // ValidateDataStructure runs first and rejects out-of-range indices before the other steps.
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const unsigned flags = aiProcess_ValidateDataStructure | aiProcess_Triangulate | aiProcess_SortByPType |
-                         aiProcess_JoinIdenticalVertices | aiProcess_FlipUVs;
+  // Polygons are counted before triangulation, whose ear clipping is quadratic in their size.
+  const unsigned flags =
+      aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_JoinIdenticalVertices | aiProcess_FlipUVs;
   const aiScene* scene = nullptr;
   std::string error;
   try {
-    scene = importer.ReadFile(path, flags);
+    scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+    if (scene) VKLOC_TRY_STATUS(checkPolygonSizes(path, *scene));
+    if (scene) scene = importer.ApplyPostProcessing(flags);
     if (!scene) error = importer.GetErrorString();
   } catch (const std::exception& e) {
     error = e.what();

@@ -13,6 +13,8 @@
 #include <optional>
 #include <set>
 #include <sstream>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "model/model_internal.hpp"
 #include "vkloc/core/text.hpp"
@@ -26,8 +28,10 @@ namespace {
 
 /// Most points, lines or faces one .cao section may declare (ViSP allows 1e5).
 constexpr uint64_t kMaxCaoCount = 1000000;
-/// Most vertices in one face.
-constexpr uint64_t kMaxFaceVertices = 100000;
+/// Most corners in one face (triangulation is O(n^2) at worst: ~0.1 s at this limit).
+constexpr uint64_t kMaxFaceVertices = kMaxCaoFacePoints;
+/// Most non-blank lines in one file (6 sections of kMaxCaoCount records, includes aside).
+constexpr size_t kMaxCaoLines = 8 * kMaxCaoCount;
 /// Deepest chain of load() includes.
 constexpr int kMaxIncludeDepth = 32;
 /// Sides of the tessellated cylinders and circles.
@@ -35,9 +39,7 @@ constexpr int kRoundSides = 32;
 /// Largest .cao / pose / XML text read, bytes.
 constexpr uint64_t kMaxTextBytes = uint64_t{256} << 20;
 
-std::string trim(std::string_view s) { return std::string(text::trim(s)); }
-
-std::vector<std::string> splitWhitespace(const std::string& s) {
+std::vector<std::string> splitWhitespace(std::string_view s) {
   std::vector<std::string> out;
   for (std::string_view field : text::splitFields(s)) out.emplace_back(field);
   return out;
@@ -55,32 +57,35 @@ Result<std::string> readText(const std::string& path) {
 
 /// One meaningful line of a .cao file: comments removed, trimmed, non-empty.
 struct CaoLine {
-  int number = 0;    ///< 1-based line number in the file.
-  std::string text;  ///< Content without comments.
+  int number = 0;         ///< 1-based line number in the file.
+  std::string_view text;  ///< Content without comments (a view into the file's text).
 };
 
-std::vector<CaoLine> caoLines(const std::string& text) {
-  std::vector<CaoLine> lines;
-  std::istringstream in(text);
-  std::string raw;
-  int number = 0;
-  while (std::getline(in, raw)) {
-    ++number;
+/// The non-blank lines of `text`; false when there are more than kMaxCaoLines.
+bool caoLines(std::string_view text, std::vector<CaoLine>& lines) {
+  text::LineCursor cursor(text);
+  for (std::string_view raw; cursor.next(raw);) {
     // '#' starts a comment anywhere; "//" too when it starts a word (ViSP's examples use it).
     size_t cut = raw.find('#');
-    for (size_t p = raw.find("//"); p != std::string::npos && p < cut; p = raw.find("//", p + 1)) {
+    size_t quotes = 0, counted = 0;  // '"' before `counted`.
+    for (size_t p = raw.find("//"); p != std::string_view::npos && p < cut; p = raw.find("//", p + 1)) {
       if (p == 0 || std::isspace(static_cast<unsigned char>(raw[p - 1]))) {
         // Keep "//" inside a quoted load() path.
-        if (std::count(raw.begin(), raw.begin() + static_cast<std::ptrdiff_t>(p), '"') % 2 == 0) {
+        quotes += static_cast<size_t>(std::count(raw.begin() + static_cast<std::ptrdiff_t>(counted),
+                                                 raw.begin() + static_cast<std::ptrdiff_t>(p), '"'));
+        counted = p;
+        if (quotes % 2 == 0) {
           cut = p;
           break;
         }
       }
     }
-    std::string content = trim(std::string_view(raw).substr(0, std::min(cut, raw.size())));
-    if (!content.empty()) lines.push_back(CaoLine{number, std::move(content)});
+    const std::string_view content = text::trim(raw.substr(0, std::min(cut, raw.size())));
+    if (content.empty()) continue;
+    if (lines.size() >= kMaxCaoLines) return false;
+    lines.push_back(CaoLine{static_cast<int>(cursor.number()), content});
   }
-  return lines;
+  return true;
 }
 
 Pose poseFromTranslationAxisAngle(const Eigen::Vector3d& t, const Eigen::Vector3d& tu) {
@@ -144,26 +149,29 @@ std::string recordName(const std::vector<std::string>& tokens, size_t first) {
   return {};
 }
 
-/// Orders the endpoints of a face's lines into one closed loop. Empty when they do not close.
+/// Orders the endpoints of a face's lines into one closed loop (at each point the first unused
+/// line in the face's order). Empty when they do not close. Linear in the number of lines.
 std::vector<uint32_t> chainLines(const std::vector<std::array<uint32_t, 2>>& edges) {
   std::vector<uint32_t> loop;
   if (edges.size() < 3) return loop;
+  // The lines at each point, in the face's order, and how many of the first are used.
+  std::unordered_map<uint32_t, std::pair<size_t, std::vector<uint32_t>>> at;
+  for (uint32_t k = 0; k < edges.size(); ++k) {
+    at[edges[k][0]].second.push_back(k);
+    if (edges[k][1] != edges[k][0]) at[edges[k][1]].second.push_back(k);
+  }
   std::vector<bool> used(edges.size(), false);
   used[0] = true;
   loop.push_back(edges[0][0]);
   uint32_t current = edges[0][1];
   for (size_t step = 1; step < edges.size(); ++step) {
     loop.push_back(current);
-    bool found = false;
-    for (size_t k = 0; k < edges.size() && !found; ++k) {
-      if (used[k]) continue;
-      if (edges[k][0] == current || edges[k][1] == current) {
-        used[k] = true;
-        current = edges[k][0] == current ? edges[k][1] : edges[k][0];
-        found = true;
-      }
-    }
-    if (!found) return {};
+    auto& [first_unused, lines] = at[current];
+    while (first_unused < lines.size() && used[lines[first_unused]]) ++first_unused;
+    if (first_unused == lines.size()) return {};
+    const uint32_t k = lines[first_unused];
+    used[k] = true;
+    current = edges[k][0] == current ? edges[k][1] : edges[k][0];
   }
   if (current != loop.front()) return {};
   return loop;
@@ -190,7 +198,10 @@ struct CaoParser {
   }
 
   Status parseText(const std::string& path, const std::string& text, const Pose& T, CaoModel& out) {
-    const std::vector<CaoLine> lines = caoLines(text);
+    std::vector<CaoLine> lines;
+    if (!caoLines(text, lines)) {
+      return fileError(ErrorCode::kMalformedInput, path, fmt::format("more than {} non-blank lines", kMaxCaoLines));
+    }
     size_t li = 0;
     auto lineError = [&](int number, const std::string& what) -> Error {
       return makeError(ErrorCode::kMalformedInput, model_detail::oneLine(fmt::format("{}:{}: {}", path, number, what)));
@@ -220,8 +231,8 @@ struct CaoParser {
       const size_t q0 = line.text.find('"');
       const size_t q1 = q0 == std::string::npos ? q0 : line.text.find('"', q0 + 1);
       if (q1 == std::string::npos) return lineError(line.number, "load() needs a quoted file name");
-      const std::string rel = line.text.substr(q0 + 1, q1 - q0 - 1);
-      const std::string params = line.text.substr(q1 + 1);
+      const std::string rel(line.text.substr(q0 + 1, q1 - q0 - 1));
+      const std::string params(line.text.substr(q1 + 1));
       Eigen::Vector3d t = Eigen::Vector3d::Zero(), tu = Eigen::Vector3d::Zero();
       if (auto p = loadParameter(params, "t"); p && !parseVector3(*p, false, t)) {
         return lineError(line.number, "load(): t= needs three numbers, e.g. t=[0.1; 0; 0]");
@@ -235,7 +246,8 @@ struct CaoParser {
       const fs::path canonical = fs::weakly_canonical(child, ec);
       const std::string key = ec ? child.string() : canonical.string();
       if (std::find(stack.begin(), stack.end(), key) != stack.end()) {
-        warnings.push_back(fmt::format("{}:{}: load(\"{}\") skipped: it includes itself", path, line.number, rel));
+        warnings.push_back(text::oneLine(
+            fmt::format("{}:{}: load({}) skipped: it includes itself", path, line.number, text::shown(rel))));
         continue;
       }
       if (!fs::exists(child, ec)) {
@@ -325,8 +337,12 @@ struct CaoParser {
       const CaoLine& line = lines[li++];
       const std::vector<std::string> tokens = splitWhitespace(line.text);
       uint64_t n = 0;
-      if (!parseIndex(tokens[0], n) || n > kMaxFaceVertices) {
+      if (!parseIndex(tokens[0], n)) {
         return lineError(line.number, fmt::format("face {}: '{}' is not a line count", k, tokens[0]));
+      }
+      if (n > kMaxFaceVertices) {
+        return lineError(line.number, fmt::format("face {} has {} lines, more than the {} allowed in one face", k, n,
+                                                  kMaxFaceVertices));
       }
       if (tokens.size() < n + 1) return lineError(line.number, fmt::format("face {}: expected {} line indices", k, n));
       std::vector<std::array<uint32_t, 2>> edges;
@@ -341,9 +357,10 @@ struct CaoParser {
       std::vector<uint32_t> loop = chainLines(edges);
       if (loop.empty()) {
         // As ViSP does: the line endpoints in the order they are listed.
+        std::unordered_set<uint32_t> seen;
         for (const auto& e : edges) {
           for (uint32_t p : e) {
-            if (std::find(loop.begin(), loop.end(), p) == loop.end()) loop.push_back(p);
+            if (seen.insert(p).second) loop.push_back(p);
           }
         }
         if (loop.size() < 3) {
@@ -366,8 +383,12 @@ struct CaoParser {
       const CaoLine& line = lines[li++];
       const std::vector<std::string> tokens = splitWhitespace(line.text);
       uint64_t n = 0;
-      if (!parseIndex(tokens[0], n) || n > kMaxFaceVertices) {
+      if (!parseIndex(tokens[0], n)) {
         return lineError(line.number, fmt::format("face {}: '{}' is not a point count", k, tokens[0]));
+      }
+      if (n > kMaxFaceVertices) {
+        return lineError(line.number, fmt::format("face {} has {} points, more than the {} allowed in one face", k, n,
+                                                  kMaxFaceVertices));
       }
       if (n < 3) return lineError(line.number, fmt::format("face {} has {} points; a face needs at least 3", k, n));
       if (tokens.size() < n + 1) return lineError(line.number, fmt::format("face {}: expected {} point indices", k, n));
@@ -558,10 +579,6 @@ std::vector<uint32_t> triangulatePolygon(const std::vector<Eigen::Vector3d>& loo
     const Eigen::Vector3d d = loop[i] - loop[ids[0]];
     p2[i] = Eigen::Vector2d(d.dot(u), d.dot(v)) / extent;
   }
-  auto cross = [&](uint32_t a, uint32_t b, uint32_t c) {
-    const Eigen::Vector2d ab = p2[b] - p2[a], bc = p2[c] - p2[b];
-    return ab.x() * bc.y() - ab.y() * bc.x();
-  };
   const double eps = 1e-12;
   auto inside = [&](uint32_t a, uint32_t b, uint32_t c, uint32_t q) {
     // q inside or on the boundary of the counter-clockwise triangle abc.
@@ -572,52 +589,127 @@ std::vector<uint32_t> triangulatePolygon(const std::vector<Eigen::Vector3d>& loo
     return side(a, b) >= -eps && side(b, c) >= -eps && side(c, a) >= -eps;
   };
 
-  std::vector<uint32_t> rem = ids;
-  size_t guard = 0;
-  while (rem.size() > 3 && guard++ < 4 * ids.size() * ids.size() + 16) {
-    const size_t m = rem.size();
-    bool clipped = false;
-    // Drop collinear vertices first: they would only give zero-area triangles.
-    for (size_t i = 0; i < m && !clipped; ++i) {
-      const uint32_t a = rem[(i + m - 1) % m], b = rem[i], c = rem[(i + 1) % m];
-      if (std::abs(cross(a, b, c)) <= eps && (p2[b] - p2[a]).dot(p2[c] - p2[b]) >= 0.0) {
-        rem.erase(rem.begin() + static_cast<std::ptrdiff_t>(i));
-        clipped = true;
-      }
-    }
-    for (size_t i = 0; i < m && !clipped; ++i) {
-      const uint32_t a = rem[(i + m - 1) % m], b = rem[i], c = rem[(i + 1) % m];
-      if (cross(a, b, c) <= eps) continue;  // Reflex or degenerate corner.
-      bool ear = true;
-      for (uint32_t q : rem) {
-        if (q == a || q == b || q == c) continue;
-        if (p2[q] == p2[a] || p2[q] == p2[b] || p2[q] == p2[c]) continue;
-        if (inside(a, b, c, q)) {
-          ear = false;
-          break;
-        }
-      }
-      if (!ear) continue;
-      out.insert(out.end(), {a, b, c});
-      rem.erase(rem.begin() + static_cast<std::ptrdiff_t>(i));
-      clipped = true;
-    }
-    if (!clipped) {
-      // Self-intersecting or otherwise degenerate loop: clip the most convex corner.
-      size_t best = 0;
-      double best_cross = -1e300;
-      for (size_t i = 0; i < m; ++i) {
-        const double cr = cross(rem[(i + m - 1) % m], rem[i], rem[(i + 1) % m]);
-        if (cr > best_cross) {
-          best_cross = cr;
-          best = i;
-        }
-      }
-      if (best_cross > eps) out.insert(out.end(), {rem[(best + m - 1) % m], rem[best], rem[(best + 1) % m]});
-      rem.erase(rem.begin() + static_cast<std::ptrdiff_t>(best));
-    }
+  // Ear clipping over a linked list of the m corners, with each corner's ear status kept and
+  // re-tested only when its neighbours change; an ear test looks at reflex (or flat) corners
+  // only, since in a simple polygon a triangle with a vertex inside also has a reflex one
+  // inside. Work O(m r) for r reflex corners, O(m^2) at worst.
+  const auto m = static_cast<uint32_t>(ids.size());
+  std::vector<Eigen::Vector2d> q(m);
+  for (uint32_t k = 0; k < m; ++k) q[k] = p2[ids[k]];
+  std::vector<uint32_t> prev(m), next(m);
+  for (uint32_t k = 0; k < m; ++k) {
+    prev[k] = (k + m - 1) % m;
+    next[k] = (k + 1) % m;
   }
-  if (rem.size() == 3 && cross(rem[0], rem[1], rem[2]) > eps) out.insert(out.end(), {rem[0], rem[1], rem[2]});
+  std::vector<char> removed(m, 0), ear(m, 0), listed(m, 0);
+  uint32_t remaining = m;
+  auto turn = [&](uint32_t k) {
+    const Eigen::Vector2d ab = q[k] - q[prev[k]], bc = q[next[k]] - q[k];
+    return ab.x() * bc.y() - ab.y() * bc.x();
+  };
+  auto straight = [&](uint32_t k) {
+    return std::abs(turn(k)) <= eps && (q[k] - q[prev[k]]).dot(q[next[k]] - q[k]) >= 0.0;
+  };
+  auto unlink = [&](uint32_t k) {
+    next[prev[k]] = next[k];
+    prev[next[k]] = prev[k];
+    removed[k] = 1;
+    --remaining;
+  };
+  std::vector<uint32_t> reflex;  // Corners that may lie inside an ear (lazily pruned).
+  auto noteReflex = [&](uint32_t k) {
+    if (!listed[k] && turn(k) <= eps) {
+      listed[k] = 1;
+      reflex.push_back(k);
+    }
+  };
+  uint64_t work = 0;  // Corner-in-triangle tests, bounded by `budget` for full re-tests.
+  const uint64_t budget = 16 * uint64_t{m} * m + 1024;
+  auto isEar = [&](uint32_t k) {
+    if (turn(k) <= eps) return false;  // Reflex or degenerate corner.
+    const uint32_t a = prev[k], c = next[k];
+    for (const uint32_t r : reflex) {
+      ++work;
+      if (removed[r] || r == a || r == k || r == c) continue;
+      if (q[r] == q[a] || q[r] == q[k] || q[r] == q[c]) continue;
+      if (inside(ids[a], ids[k], ids[c], ids[r])) return false;
+    }
+    return true;
+  };
+  std::vector<uint32_t> ears;     // Stack of corners that were ears when pushed.
+  std::vector<uint32_t> touched;  // Corners whose neighbours changed.
+  // Drops flat corners among `touched` (and the corners next to each one dropped), then
+  // re-tests the ear status of those that stay.
+  auto settle = [&]() {
+    for (size_t i = 0; i < touched.size() && remaining > 3; ++i) {
+      const uint32_t k = touched[i];
+      if (removed[k] || !straight(k)) continue;
+      touched.push_back(prev[k]);
+      touched.push_back(next[k]);
+      unlink(k);
+    }
+    for (const uint32_t k : touched) {
+      if (removed[k]) continue;
+      noteReflex(k);
+      ear[k] = isEar(k) ? 1 : 0;
+      if (ear[k]) ears.push_back(k);
+    }
+    touched.clear();
+    if (reflex.size() > 2 * size_t{remaining} + 64) {
+      reflex.erase(std::remove_if(reflex.begin(), reflex.end(), [&](uint32_t r) { return removed[r] != 0; }),
+                   reflex.end());
+    }
+  };
+  auto clip = [&](uint32_t k, bool emit) {
+    if (emit) out.insert(out.end(), {ids[prev[k]], ids[k], ids[next[k]]});
+    touched.push_back(prev[k]);
+    touched.push_back(next[k]);
+    unlink(k);
+    settle();
+  };
+
+  for (uint32_t k = 0; k < m; ++k) touched.push_back(k);
+  for (uint32_t k = 0; k < m; ++k) noteReflex(k);
+  settle();
+  uint32_t any = 0;  // A corner still in the list.
+  while (remaining > 3) {
+    uint32_t k = m;
+    while (!ears.empty() && k == m) {
+      const uint32_t candidate = ears.back();
+      ears.pop_back();
+      if (!removed[candidate] && ear[candidate]) k = candidate;
+    }
+    if (k != m) {
+      clip(k, true);
+      continue;
+    }
+    while (removed[any]) ++any;
+    if (work < budget) {
+      // No known ear (the loop touches or crosses itself): re-test every corner once.
+      uint32_t j = any;
+      do {
+        ear[j] = isEar(j) ? 1 : 0;
+        if (ear[j]) ears.push_back(j);
+        j = next[j];
+      } while (j != any);
+      if (!ears.empty()) continue;
+    }
+    // Self-intersecting or otherwise degenerate loop: clip the most convex corner.
+    uint32_t best = any;
+    double best_turn = -1e300;
+    uint32_t j = any;
+    do {
+      const double t = turn(j);
+      if (t > best_turn) {
+        best_turn = t;
+        best = j;
+      }
+      j = next[j];
+    } while (j != any);
+    clip(best, best_turn > eps);
+  }
+  while (removed[any]) ++any;
+  if (remaining == 3 && turn(next[any]) > eps) out.insert(out.end(), {ids[any], ids[next[any]], ids[next[next[any]]]});
   return out;
 }
 

@@ -21,6 +21,11 @@ namespace vkloc::model_detail {
 
 /// Most vertices, and most triangles, a loaded model may have (positions alone would take 3 GiB).
 constexpr size_t kMaxModelElements = size_t{1} << 28;
+/// Largest model, buffer or texture file, bytes: an OBJ of ~80 million triangles.
+constexpr uint64_t kMaxModelFileBytes = uint64_t{1} << 32;
+/// Most corners in one polygon of a file assimp triangulates (OBJ 'f' lines, PLY face lists,
+/// other formats' polygons): assimp's ear clipping is quadratic (a 20,000-gon takes 13 s).
+constexpr uint64_t kMaxPolygonVertices = 1024;
 
 /// One mesh part as a loader produces it, before it is merged into a Model: attributes of
 /// equal length (`uvs` / `colors` empty when absent), indices local to this primitive.
@@ -41,9 +46,9 @@ std::string oneLine(std::string text);
 /// Lower-case extension of `path` including the dot (".obj"), or "" when there is none.
 std::string lowerExtension(const std::string& path);
 
-/// Reads at most `max_bytes` from the start of a file. Errors name the path: kNotFound when it
-/// does not exist, kIoError when it is a directory or cannot be read.
-Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max_bytes = UINT64_MAX);
+/// Reads a whole file. Errors name the path: kNotFound when it does not exist, kIoError when it
+/// is a directory or cannot be read, kMalformedInput when it is larger than `max_bytes`.
+Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max_bytes = kMaxModelFileBytes);
 
 /// Appends `prim` to `model` as one draw range, padding `uvs` (zeros) and `colors` (white) so
 /// they stay parallel to `positions`. Fails (kMalformedInput, message "<path>: <what>: ...")

@@ -2,6 +2,7 @@
 // placement in the world, validation, and the helpers the format loaders share.
 #include <fmt/format.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -44,8 +45,12 @@ Result<std::vector<uint8_t>> readFileBytes(const std::string& path, uint64_t max
   file.seekg(0, std::ios::end);
   const std::streamoff size = file.tellg();
   if (!file || size < 0) return fileError(ErrorCode::kIoError, path, "cannot read file");
+  if (static_cast<uint64_t>(size) > max_bytes) {
+    return fileError(ErrorCode::kMalformedInput, path,
+                     fmt::format("file is larger than the {} bytes allowed ({} bytes)", max_bytes, size));
+  }
   file.seekg(0);
-  std::vector<uint8_t> bytes(static_cast<size_t>(std::min<uint64_t>(size, max_bytes)));
+  std::vector<uint8_t> bytes(static_cast<size_t>(size));
   file.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
   if (!file) return fileError(ErrorCode::kIoError, path, "read error");
   return bytes;
@@ -234,6 +239,27 @@ Error modelError(const Model& model, const std::string& what) {
 
 bool finite3(const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
 
+// A model whose triangles all have no area (corners on one point or one line) has no edges to
+// render or track. A triangle has area when twice its area, |u x v|, exceeds what rounding the
+// corners to float can make of a degenerate one: 8 eps M (|u| + |v| + |w|), M the largest
+// coordinate magnitude of its corners. Precondition: finite positions, indices in range.
+Status checkArea(const Model& model) {
+  constexpr double kEps = 1.1920928955078125e-07;  // float epsilon, 2^-23
+  for (size_t t = 0; t + 2 < model.indices.size(); t += 3) {
+    const float* a = &model.positions[3 * size_t{model.indices[t]}];
+    const float* b = &model.positions[3 * size_t{model.indices[t + 1]}];
+    const float* c = &model.positions[3 * size_t{model.indices[t + 2]}];
+    const Eigen::Vector3d pa(a[0], a[1], a[2]), pb(b[0], b[1], b[2]), pc(c[0], c[1], c[2]);
+    const Eigen::Vector3d u = pb - pa, v = pc - pa;
+    const double magnitude = std::max({pa.cwiseAbs().maxCoeff(), pb.cwiseAbs().maxCoeff(), pc.cwiseAbs().maxCoeff()});
+    const double noise = 8.0 * kEps * magnitude * (u.norm() + v.norm() + (pc - pb).norm());
+    if (u.cross(v).norm() > noise && u.cross(v).norm() > 0.0) return Status::success();
+  }
+  return modelError(model, fmt::format("none of the model's {} triangles has an area (the corners of each lie on one "
+                                       "point or line): there is nothing to render or track",
+                                       model.triangleCount()));
+}
+
 // Attribute sizes, finite values, index range, material and texture references.
 Status validateGeometry(const Model& model) {
   const size_t n = model.vertexCount();
@@ -268,6 +294,7 @@ Status validateGeometry(const Model& model) {
           model, fmt::format("triangle {} references vertex {} but there are {} vertices", i / 3, model.indices[i], n));
     }
   }
+  VKLOC_TRY_STATUS(checkArea(model));
   if (model.materials.empty()) return modelError(model, "model has no materials");
   for (size_t i = 0; i < model.materials.size(); ++i) {
     const Material& m = model.materials[i];
@@ -402,6 +429,11 @@ Result<Model> loadChecked(const std::string& path, const ModelLoadOptions& optio
   const uintmax_t size = fs::file_size(path, ec);
   if (ec) return fileError(ErrorCode::kIoError, path, "cannot read file: " + ec.message());
   if (size == 0) return fileError(ErrorCode::kMalformedInput, path, "file is empty");
+  if (size > model_detail::kMaxModelFileBytes) {
+    return fileError(
+        ErrorCode::kMalformedInput, path,
+        fmt::format("file is larger than the {} bytes allowed ({} bytes)", model_detail::kMaxModelFileBytes, size));
+  }
 
   const std::string ext = model_detail::lowerExtension(path);
   Result<Model> loaded = [&]() -> Result<Model> {

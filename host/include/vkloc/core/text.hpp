@@ -26,6 +26,33 @@ bool isBlankOrComment(std::string_view line);
 /// Splits text into lines at '\n' (a trailing '\r' stays in the line); lines[i] is line i + 1.
 std::vector<std::string_view> splitLines(std::string_view text);
 
+/// Walks text line by line without copying or storing the lines (memory independent of the
+/// line count): `while (cursor.next(line))`. Lines end at '\n' (a trailing '\r' stays in the
+/// line); number() is the 1-based number of the line last returned.
+class LineCursor {
+ public:
+  explicit LineCursor(std::string_view text) : text_(text) {}
+  bool next(std::string_view& line) {
+    if (pos_ >= text_.size()) return false;
+    size_t end = text_.find('\n', pos_);
+    if (end == std::string_view::npos) end = text_.size();
+    line = text_.substr(pos_, end - pos_);
+    pos_ = end + 1;
+    ++number_;
+    return true;
+  }
+  size_t number() const { return number_; }
+
+ private:
+  std::string_view text_;
+  size_t pos_ = 0;
+  size_t number_ = 0;
+};
+
+/// Offset of the first byte that is not part of well-formed UTF-8 (overlong forms, surrogates
+/// and code points above U+10FFFF are not), or npos when all of `s` is.
+size_t invalidUtf8Offset(std::string_view s);
+
 /// Splits on white space (and on commas when `commas_too`), dropping empty fields.
 std::vector<std::string_view> splitFields(std::string_view line, bool commas_too = false);
 
@@ -72,11 +99,11 @@ std::string parseSecondsToNs(std::string_view token, int64_t& out);
 std::string formatSeconds(int64_t t_ns);
 
 /// Reads a whole file. kNotFound when it does not exist or is a folder; kIoError when it
-/// cannot be read; kMalformedInput when it is larger than max_bytes. `what` names the file's
-/// role in messages ("camera file").
+/// cannot be read; kMalformedInput "path: <what> is larger than N bytes" when it is larger than
+/// max_bytes (checked before reading). `what` names the file's role in messages ("camera file").
 Result<std::string> readFile(const std::string& path, const char* what, uint64_t max_bytes = uint64_t{1} << 32);
 
-/// kMalformedInput "path:line: what".
+/// kMalformedInput "path:line: what", made one line by oneLine() (no raw control characters).
 Error lineError(const std::string& path, size_t line, const std::string& what);
 
 // --- implementation -----------------------------------------------------------------------------

@@ -37,11 +37,16 @@ struct CaoModel {
   std::vector<std::vector<uint32_t>> extra_faces;  ///< Cylinder / circle tessellation (triangles).
 };
 
+/// Most points (or lines) in one .cao face. Ear clipping is O(n^2) at worst; a face of this
+/// many points triangulates in well under a second.
+constexpr uint64_t kMaxCaoFacePoints = 10000;
+
 /// Parses a .cao file and its includes. Cylinders become 32-sided open tubes and circles
 /// 32-sided discs (both listed in `extra_faces`, with a warning). An include that would load a
 /// file already being loaded is skipped with a warning. Returns kNotFound for a missing file and
 /// kMalformedInput "file:line: what" for bad content (missing or non-numeric fields, indices out
-/// of range, counts above 1e6, non-finite values, faces with fewer than 3 points or lines that
+/// of range, counts above 1e6, faces above kMaxCaoFacePoints points, more than 8e6 non-blank
+/// lines, files above 256 MiB, non-finite values, faces with fewer than 3 points or lines that
 /// do not form a closed loop).
 Result<CaoModel> parseCaoFile(const std::string& path, std::vector<std::string>* warnings = nullptr);
 
@@ -49,6 +54,8 @@ Result<CaoModel> parseCaoFile(const std::string& path, std::vector<std::string>*
 void appendCaoModel(CaoModel& model, const CaoModel& part, const Pose& T_model_part);
 
 /// Ear-clipping triangulation of a planar (or nearly planar) simple polygon, concave allowed.
+/// Time O(n r) for n corners of which r are reflex, O(n^2) at worst, also for loops that touch
+/// or cross themselves (triangulated as well as may be).
 /// The loop is projected onto its best-fit plane (Newell normal); the triangles keep the loop's
 /// winding, so a loop that is counter-clockwise seen from outside gives triangles that are too.
 /// Returns 3 indices into `loop` per triangle (n - 2 triangles for n distinct vertices), or an
