@@ -125,14 +125,14 @@ TEST(HostileModels, CaoFaceAboveTheLimitIsRefused) {
   TempDir dir("hostile_cao");
   const std::string path = dir.file("big.cao");
   ASSERT_TRUE(writeFile(path, caoPolygon(circle(20000))));
-  expectRefused(loadModel(path), path, "face 0 has 20000 points, more than the 10000 allowed in one face");
+  expectRefused(loadModel(path), path, "face 0 has 20000 points, more than the 4096 allowed in one face");
   ASSERT_TRUE(writeFile(path, "V1\n3\n0 0 0\n1 0 0\n0 1 0\n0\n0\n1\n1000000 0 1 2\n0\n0\n"));
-  expectRefused(loadModel(path), path, "face 0 has 1000000 points, more than the 10000 allowed");
+  expectRefused(loadModel(path), path, "face 0 has 1000000 points, more than the 4096 allowed");
 }
 
 TEST(HostileModels, CaoCombAtTheLimitTriangulatesExactly) {
-  // 9,998 corners, half of them reflex: quadratic at worst, not cubic.
-  const std::vector<Eigen::Vector2d> points = comb(2499);
+  // 4,094 corners, half of them reflex: quadratic at worst, not cubic.
+  const std::vector<Eigen::Vector2d> points = comb(1023);
   ASSERT_LE(points.size(), kMaxCaoFacePoints);
   TempDir dir("hostile_comb");
   const std::string path = dir.file("comb.cao");
@@ -141,7 +141,7 @@ TEST(HostileModels, CaoCombAtTheLimitTriangulatesExactly) {
   ASSERT_TRUE(loaded.ok()) << loaded.error().message;
   // n - 2 triangles, fewer when clipping leaves collinear corners (dropped, zero area).
   EXPECT_LE(loaded->triangleCount(), points.size() - 2);
-  EXPECT_NEAR(modelArea(*loaded), 5.5 * 2499, 1e-6 * 5.5 * 2499);
+  EXPECT_NEAR(modelArea(*loaded), 5.5 * 1023, 1e-6 * 5.5 * 1023);
   // The same polygon through triangulatePolygon, reversed: same area.
   std::vector<Eigen::Vector3d> loop;
   for (auto it = points.rbegin(); it != points.rend(); ++it) loop.emplace_back(it->x(), it->y(), 0.0);
@@ -151,12 +151,12 @@ TEST(HostileModels, CaoCombAtTheLimitTriangulatesExactly) {
   for (size_t t = 0; t < tri.size(); t += 3) {
     area += 0.5 * (loop[tri[t + 1]] - loop[tri[t]]).cross(loop[tri[t + 2]] - loop[tri[t]]).z();
   }
-  EXPECT_NEAR(area, -5.5 * 2499, 1e-6 * 5.5 * 2499);
+  EXPECT_NEAR(area, -5.5 * 1023, 1e-6 * 5.5 * 1023);
 }
 
 TEST(HostileModels, CaoFaceFromManyLinesChainsInLinearTime) {
-  // A face given as 10,000 lines listed in reverse: chaining scanned every line per step.
-  const std::vector<Eigen::Vector2d> points = circle(10000);
+  // A face given as 4,000 lines listed in reverse: chaining scanned every line per step.
+  const std::vector<Eigen::Vector2d> points = circle(4000);
   std::string text = fmt::format("V1\n{}\n", points.size());
   for (const auto& p : points) text += fmt::format("{} {} 0\n", p.x(), p.y());
   text += fmt::format("{}\n", points.size());

@@ -28,7 +28,7 @@ namespace {
 
 /// Most points, lines or faces one .cao section may declare (ViSP allows 1e5).
 constexpr uint64_t kMaxCaoCount = 1000000;
-/// Most corners in one face (triangulation is O(n^2) at worst: ~0.1 s at this limit).
+/// Most corners in one face (ear clipping is O(n^2) at worst: ~0.25 s at this limit).
 constexpr uint64_t kMaxFaceVertices = kMaxCaoFacePoints;
 /// Most non-blank lines in one file (6 sections of kMaxCaoCount records, includes aside).
 constexpr size_t kMaxCaoLines = 8 * kMaxCaoCount;
@@ -624,7 +624,7 @@ std::vector<uint32_t> triangulatePolygon(const std::vector<Eigen::Vector3d>& loo
     }
   };
   uint64_t work = 0;  // Corner-in-triangle tests, bounded by `budget` for full re-tests.
-  const uint64_t budget = 16 * uint64_t{m} * m + 1024;
+  const uint64_t budget = 2 * uint64_t{m} * m + 1024;
   auto isEar = [&](uint32_t k) {
     if (turn(k) <= eps) return false;  // Reflex or degenerate corner.
     const uint32_t a = prev[k], c = next[k];

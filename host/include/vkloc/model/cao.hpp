@@ -39,7 +39,7 @@ struct CaoModel {
 
 /// Most points (or lines) in one .cao face. Ear clipping is O(n^2) at worst; a face of this
 /// many points triangulates in well under a second.
-constexpr uint64_t kMaxCaoFacePoints = 10000;
+constexpr uint64_t kMaxCaoFacePoints = 4096;
 
 /// Parses a .cao file and its includes. Cylinders become 32-sided open tubes and circles
 /// 32-sided discs (both listed in `extra_faces`, with a warning). An include that would load a
