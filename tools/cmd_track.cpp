@@ -233,7 +233,7 @@ void run(const TrackArgs& a) {
       "rerendered,visible_ratio,spread_ratio,chance_inlier_ratio,scale_px,keyframe_id,keyframe_age_frames,"
       "keyframe_adopted,visual_rejected,ekf_nis,inertial_sigma_m,verify_score,search_level,"
       "search_probes,image_shift_px,prior_restarted,relocalization_candidates,search_radius_m,relocalization_ms,"
-      "front_ms,view_tilt_deg"));
+      "front_ms,view_tilt_deg,image_content,image_contrast"));
   // The filter's output at the IMU rate (kEkf): camera pose, body velocity, 1-sigma figures.
   const std::string filter_path = (out_path.parent_path() / (out_path.stem().string() + "_filter.csv")).string();
   auto filter_out = take(PartialFileWriter::open(filter_path));
@@ -244,7 +244,8 @@ void run(const TrackArgs& a) {
   size_t last_decile = 0;
   std::vector<StampedPose> estimate;
   std::vector<double> total_ms, depths;
-  size_t lost = 0, inertial = 0, rejected = 0, rerendered = 0, lost_after_first = 0, relocalized = 0, initializing = 0;
+  size_t lost = 0, inertial = 0, rejected = 0, rerendered = 0, lost_after_first = 0, relocalized = 0, initializing = 0,
+         no_content = 0;
   // Readings from one frame interval before the first image tracked on (the filter starts there).
   size_t next_imu = 0;
   if (first > 0) {
@@ -273,6 +274,7 @@ void run(const TrackArgs& a) {
       lost_after_first += !has_pose && first_tracked >= 0;
       inertial += f.state == TrackingState::kInertial;
       rejected += f.visual_rejected;
+      no_content += f.image_content != ImageContent::kOk;
       if (has_pose) {
         check(traj->appendLine(fmt::format("{} {}", seconds(entry.t_ns), formatPose(f.T_world_camera))));
         estimate.push_back({entry.t_ns, f.T_world_camera});
@@ -283,7 +285,7 @@ void run(const TrackArgs& a) {
       check(frames->appendLine(fmt::format(
           "{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{},{},{:."
           "4g},"
-          "{:.4g},{:.4f},{},{},{:.1f},{},{},{:.4g},{:.1f},{:.3f},{:.2f}",
+          "{:.4g},{:.4f},{},{},{:.1f},{},{},{:.4g},{:.1f},{:.3f},{:.2f},{},{:.2f}",
           entry.t_ns, trackingStateName(f.state), f.render_ms, f.reference_ms, f.live_ms, f.align_ms, f.total_ms,
           f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used, f.quality.iterations,
           f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio, f.quality.chance_inlier_ratio,
@@ -291,7 +293,8 @@ void run(const TrackArgs& a) {
           f.visual_rejected ? 1 : 0, f.innovation, f.inertial_sigma_m, f.verify_score, f.search_level,
           f.motion_search_probes, f.image_shift_px, f.prior_restarted ? 1 : 0, f.relocalization_candidates,
           f.search_radius_m, f.relocalization_ms, f.front_ms,
-          Eigen::AngleAxisd(f.T_camera_view.linear()).angle() * 180.0 / M_PI)));
+          Eigen::AngleAxisd(f.T_camera_view.linear()).angle() * 180.0 / M_PI, imageContentName(f.image_content),
+          f.image_contrast)));
       for (const FilterOutput& o : localizer->takeFilterOutputs()) {
         const Eigen::Quaterniond q(o.T_world_camera.linear());
         const Eigen::Vector3d& t = o.T_world_camera.translation();
@@ -354,10 +357,11 @@ void run(const TrackArgs& a) {
       "  \"policy\": \"{}\",\n  \"startup_ms\": {:.1f},\n  \"first_frame_ms\": {:.1f},\n  \"median_frame_ms\": "
       "{:.3f},\n"
       "  \"hz_median\": {:.3f},\n  \"first_tracked_frame\": {},\n  \"lost_after_first_tracked\": {},\n  "
-      "\"scene_depth_median_m\": {:.6g},\n  \"relocalized\": {},\n  \"initializing\": {}",
+      "\"scene_depth_median_m\": {:.6g},\n  \"relocalized\": {},\n  \"initializing\": {},\n  "
+      "\"no_image_content\": {}",
       seq.name, total, lost, inertial, rejected, rerendered, localizerBackendName(options.backend), a.localizer.policy,
       setup_ms, first_frame_ms, total_ms.empty() ? 0.0 : median(total_ms), hz, first_tracked, lost_after_first,
-      median(depths), relocalized, initializing);
+      median(depths), relocalized, initializing, no_content);
   std::filesystem::path report_dir = a.report_dir.empty()
                                          ? out_path.parent_path() / (out_path.stem().string() + "_report")
                                          : std::filesystem::path(a.report_dir);
@@ -420,6 +424,12 @@ void run(const TrackArgs& a) {
       "start-up %.0f ms, first frame %.0f ms (includes shader compilation)\n",
       total, lost, inertial, relocalized, initializing, rerendered, hz, total_ms.empty() ? 0.0 : median(total_ms),
       setup_ms, first_frame_ms);
+  if (no_content > 0) {
+    std::printf(
+        "%zu frames had nothing to align (black, saturated or uniform; frames log column image_content): "
+        "not aligned or searched, bridged by the IMU where it runs\n",
+        no_content);
+  }
   std::printf("wrote %s and %s\n", a.out.c_str(), frames_path.c_str());
 }
 

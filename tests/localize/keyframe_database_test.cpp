@@ -56,26 +56,10 @@ const std::shared_ptr<const KeyframeDatabase>& boxDatabase() {
   return db;
 }
 
-/// Three boxes of different sizes on the checker ground: unlike the single box, no turn of the
-/// scene maps it onto itself, so a view has one true place.
-Model makeAsymmetricScene() {
-  Model m = test::makeBoxOnGround();
-  for (const auto& [lo, hi] : {std::pair<Eigen::Vector3d, Eigen::Vector3d>{{0.5, 0.4, 0.0}, {0.8, 0.6, 0.7}},
-                               std::pair<Eigen::Vector3d, Eigen::Vector3d>{{-0.9, -0.6, 0.0}, {-0.6, -0.2, 0.2}}}) {
-    const Model box = test::makeBox(lo, hi);
-    const uint32_t base = static_cast<uint32_t>(m.vertexCount());
-    m.positions.insert(m.positions.end(), box.positions.begin(), box.positions.end());
-    m.uvs.insert(m.uvs.end(), box.uvs.begin(), box.uvs.end());
-    for (uint32_t i : box.indices) m.indices.push_back(base + i);
-  }
-  test::finishSingleBlock(m);
-  return m;
-}
-
 /// The asymmetric scene's database and its frames at localizeTruth(i), built once per process.
 const std::shared_ptr<const KeyframeDatabase>& asymmetricDatabase() {
   static std::shared_ptr<const KeyframeDatabase> db = [] {
-    const Model model = makeAsymmetricScene();
+    const Model model = test::makeAsymmetricScene();
     auto r0 = CpuRenderer::create(model);
     auto r1 = CpuRenderer::create(model);
     EXPECT_TRUE(r0.ok() && r1.ok());
@@ -91,7 +75,7 @@ const ImageU8& asymmetricFrame(int i) {
   static std::map<int, ImageU8> frames;
   auto it = frames.find(i);
   if (it == frames.end()) {
-    auto view = renderReference(makeAsymmetricScene(), test::localizeCamera(), test::localizeTruth(i));
+    auto view = renderReference(test::makeAsymmetricScene(), test::localizeCamera(), test::localizeTruth(i));
     EXPECT_TRUE(view.ok());
     it = frames.emplace(i, view.ok() ? view->gray : ImageU8(320, 240, 1)).first;
   }
@@ -265,7 +249,7 @@ TEST(KeyframeDatabase, SavedFileLoadsAndDamagedOrForeignFilesAreRefused) {
 std::unique_ptr<Localizer> relocalizer(KeyframeThreading threading) {
   LocalizerOptions options;
   options.keyframe_threading = threading;
-  auto created = Localizer::create(makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
+  auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
   EXPECT_TRUE(created.ok()) << created.error().message;
   if (!created.ok()) return nullptr;
   EXPECT_TRUE((*created)->setKeyframeDatabase(asymmetricDatabase()).ok());
@@ -374,10 +358,10 @@ TEST(Relocalization, DatabaseAndSearchErrors) {
   EXPECT_FALSE(localizer->startSearch(std::nullopt).ok());
   LocalizerOptions bad;
   bad.relocalization.candidates = 0;
-  EXPECT_FALSE(Localizer::create(makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
+  EXPECT_FALSE(Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
   bad = LocalizerOptions{};
   bad.relocalization.min_radius_m = NAN;
-  EXPECT_FALSE(Localizer::create(makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
+  EXPECT_FALSE(Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
 }
 
 }  // namespace

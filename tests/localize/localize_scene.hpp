@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "support/analytic_scenes.hpp"
@@ -31,6 +32,22 @@ inline const std::vector<ImageU8>& localizeFrames(int n) {
     }
   }
   return frames;
+}
+
+/// Three boxes of different sizes on the checker ground: unlike the single box, no turn of the
+/// scene maps it onto itself, so a view has one true place.
+inline Model makeAsymmetricScene() {
+  Model m = makeBoxOnGround();
+  for (const auto& [lo, hi] : {std::pair<Eigen::Vector3d, Eigen::Vector3d>{{0.5, 0.4, 0.0}, {0.8, 0.6, 0.7}},
+                               std::pair<Eigen::Vector3d, Eigen::Vector3d>{{-0.9, -0.6, 0.0}, {-0.6, -0.2, 0.2}}}) {
+    const Model box = makeBox(lo, hi);
+    const uint32_t base = static_cast<uint32_t>(m.vertexCount());
+    m.positions.insert(m.positions.end(), box.positions.begin(), box.positions.end());
+    m.uvs.insert(m.uvs.end(), box.uvs.begin(), box.uvs.end());
+    for (uint32_t i : box.indices) m.indices.push_back(base + i);
+  }
+  finishSingleBlock(m);
+  return m;
 }
 
 inline double translationError(const Pose& a, const Pose& b) { return (a.translation() - b.translation()).norm(); }

@@ -88,6 +88,7 @@ Status validateOptions(const LocalizerOptions& o) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: kind_visibility_ratio must be in 0..1");
   }
   VKLOC_TRY_STATUS(validateInitializerOptions(initializerOptions(o)));
+  VKLOC_TRY_STATUS(validateImageContentOptions(o.image_content));
   if (r.max_frames < 1) return makeError(ErrorCode::kInvalidArgument, "Localizer: rerender.max_frames must be >= 1");
   if (o.max_keyframe_lead_frames < 0 || o.max_keyframe_lead_frames > 100) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: max_keyframe_lead_frames must be in 0..100");
@@ -662,6 +663,42 @@ struct Localizer::Impl {
     out.keyframe_age_frames = frame_index - keyframe.request.frame_index;
   }
 
+  /// A frame with nothing to align (checkImageContent): no alignment or search; the motion prior
+  /// bridges it (kInertial with the IMU, else kLost; kInitializing while a search is on). It
+  /// counts as a lost frame: a later frame that is not tracked is searched for at once.
+  LocalizationResult emptyFrame(int64_t t_ns, const ImageContentCheck& content,
+                                const std::optional<Pose>& guess_given) {
+    LocalizationResult out;
+    out.t_ns = t_ns;
+    out.image_content = content.content;
+    out.image_contrast = content.contrast;
+    live_ready = false;
+    last_t_ns = t_ns;
+    if (searching) {
+      out.state = TrackingState::kInitializing;
+      return out;
+    }
+    const std::optional<MotionPrediction> prediction = motion->predict(t_ns);
+    const Pose guess = guess_given ? *guess_given : prediction->T_world_camera;
+    out.T_world_camera = guess;
+    if (prediction && prediction->inertial) out.inertial_sigma_m = prediction->sigma_m;
+    const std::optional<BridgedPose> bridged = motion->bridge(t_ns, prediction, guess);
+    if (bridged) {
+      out.state = TrackingState::kInertial;
+      out.T_world_camera = bridged->T_world_camera;
+      out.covariance = bridged->covariance;
+    } else {
+      out.state = TrackingState::kLost;
+    }
+    keyframes->frameNotTracked();  // the next frame aligns against a keyframe made at its guess
+    ++untracked;
+    if (const Keyframe* current = keyframes->current().get()) {
+      out.keyframe_id = current->id;
+      out.keyframe_age_frames = frame_index - current->request.frame_index;
+    }
+    return out;
+  }
+
   /// First-frame calibration of kAuto with calibrate_backend: run both and keep the faster.
   Status calibrate(const ImageU8& gray, const Pose& guess) {
     calibration_pending = false;
@@ -991,12 +1028,27 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   if (m.last_t_ns) m.frame_interval_ns = t_ns - *m.last_t_ns;
   const std::optional<int64_t> previous_t_ns = m.last_t_ns;
 
-  // 0. Global initialization (startSearch): the frame is searched in the region until a pose is
-  // verified; a guess given meanwhile ends the search (a user's or a GPS's pose).
+  // 0. A frame with nothing to align (black, saturated, uniform): reported at once; the motion
+  // prior bridges it (the IMU keeps running), and no alignment, search or relocalization runs.
   if (m.searching && T_world_camera_guess) m.searching = false;
+  double image_contrast = 0;
+  if (m.options.image_content.min_contrast > 0) {
+    Result<ImageContentCheck> content = checkImageContent(gray, m.options.image_content);
+    if (!content.ok()) return content.error();
+    image_contrast = content->contrast;
+    if (content->content != ImageContent::kOk) {
+      LocalizationResult out = m.emptyFrame(t_ns, *content, T_world_camera_guess);
+      out.total_ms = msSince(t_start);
+      return out;
+    }
+  }
+
+  // 0b. Global initialization (startSearch): the frame is searched in the region until a pose is
+  // verified; a guess given meanwhile ends the search (a user's or a GPS's pose).
   if (m.searching) {
     LocalizationResult out;
     out.t_ns = t_ns;
+    out.image_contrast = image_contrast;
     out.state = TrackingState::kInitializing;
     m.live_ready = false;
     m.last_t_ns = t_ns;
@@ -1016,6 +1068,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   const Pose guess = T_world_camera_guess ? *T_world_camera_guess : prediction->T_world_camera;
   LocalizationResult out;
   out.t_ns = t_ns;
+  out.image_contrast = image_contrast;
   out.T_world_camera = guess;
 
   // 2. The keyframe: the newest the worker finished; made here (waiting) when there is none to

@@ -1,6 +1,8 @@
 // vkloc: frame-to-model localization, the product's main class. The data flow of one frame:
 //
-//   image --> edge backend: live stages (pyramid, edges, distance fields)
+//   image --> content check: a frame with nothing to align (black, saturated, uniform) is reported
+//             at once (ImageContent); the motion prior bridges it and nothing is searched
+//         --> edge backend: live stages (pyramid, edges, distance fields)
 //         --> alignment of the current keyframe's 3D edge points (seed 000 sec. IV-C) from the
 //             motion prior's guess (constant velocity, or the IMU: MotionPrior)
 //         --> initializer while nothing was tracked since create/reset (Initializer)
@@ -33,6 +35,7 @@
 #include "vkloc/core/status.hpp"
 #include "vkloc/fusion/sensors.hpp"
 #include "vkloc/localize/camera_front.hpp"
+#include "vkloc/localize/image_content.hpp"
 #include "vkloc/localize/initializer.hpp"
 #include "vkloc/localize/keyframe_database.hpp"
 #include "vkloc/localize/keyframe_manager.hpp"
@@ -188,6 +191,10 @@ struct LocalizerOptions {
   bool calibrate_backend = false;
   /// Relocalization and global initialization (used only when a keyframe database is given).
   RelocalizationOptions relocalization;
+  /// Frames with nothing to align (checkImageContent; min_contrast 0 = check off): no alignment,
+  /// search or relocalization runs on them; the motion prior bridges them (kInertial with the
+  /// IMU, else kLost) and LocalizationResult::image_content says why.
+  ImageContentOptions image_content;
 };
 
 /// Outcome of one localized frame.
@@ -205,6 +212,11 @@ struct LocalizationResult {
   /// IMU, T_world_camera is the inertial prediction (InertialAiding); kLost: no trusted pose.
   TrackingState state = TrackingState::kLost;
   bool visual_rejected = false;  ///< The alignment tracked but lay outside the inertial gate.
+  /// kOk, or why the frame had nothing to align (then nothing was aligned or searched, and
+  /// state is kInertial, kLost or kInitializing), and the contrast it was decided on
+  /// (ImageContentCheck::contrast, gray levels; 0 when the check is off).
+  ImageContent image_content = ImageContent::kOk;
+  double image_contrast = 0;
   /// The motion prior was restarted at this frame's pose (LocalizerOptions::restart_after_refusals).
   bool prior_restarted = false;
   /// Squared Mahalanobis distance of the tracked pose to the filter's prediction (kEkf; NaN when
