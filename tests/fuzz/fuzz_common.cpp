@@ -1,8 +1,10 @@
 #include "fuzz_common.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -24,8 +26,16 @@ std::string makeScratchDir() {
     const char* tmp = std::getenv("TMPDIR");
     base = tmp && *tmp ? tmp : "/tmp";
   }
-  const std::string dir = base + "/vkloc_fuzz_" + std::to_string(getpid());
+  // Folders of earlier runs that crashed (atexit does not run on abort) are removed here.
+  const std::string prefix = "vkloc_fuzz_";
   std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(base, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const long pid = std::strtol(name.c_str() + prefix.size(), nullptr, 10);
+    if (pid > 0 && kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) fs::remove_all(e.path(), ec);
+  }
+  const std::string dir = base + "/" + prefix + std::to_string(getpid());
   fs::remove_all(dir, ec);
   fs::create_directories(dir, ec);
   if (ec) {
