@@ -8,6 +8,8 @@
 #include <random>
 #include <vector>
 
+#include "vkloc/core/pose.hpp"
+
 namespace vkloc {
 namespace {
 
@@ -159,6 +161,20 @@ TEST(Se3, PointJacobianOfLeftPerturbationMatchesNumeric) {
   // Left increments compose in the left frame: exp(d) T moves T's points by exp(d).
   const Vector6d d = 0.1 * a;
   EXPECT_LT(((applyLeftIncrement(T, d) * p_ref) - (expSE3(d) * p)).norm(), 1e-14);
+}
+
+}  // namespace
+}  // namespace vkloc
+
+namespace vkloc {
+namespace {
+
+TEST(PoseText, BadTokenIsQuotedPrintably) {
+  const auto parsed = parseNumbers(std::string("1 2\x1b[2J\x01 3", 10), "--init-offset", 3);
+  ASSERT_FALSE(parsed.ok());
+  const std::string& message = parsed.error().message;
+  EXPECT_NE(message.find("is not a number"), std::string::npos) << message;
+  for (const char c : message) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 || c == 0x7f) << message;
 }
 
 }  // namespace

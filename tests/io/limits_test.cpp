@@ -89,6 +89,18 @@ TEST(SequenceFolder, SaveRefusesNonUtf8NameAndModelInsteadOfReplacingBytes) {
   EXPECT_EQ(loaded->model, s.model);
 }
 
+TEST(SequenceFolder, LoadRefusesTheNonUtf8NamesSaveRefuses) {
+  TempDir dir("limits_utf8_load");
+  const std::string folder = dir.file("seq");
+  ASSERT_TRUE(saveSequence(smallSequence(), folder).ok());
+  const std::string yaml = folder + "/sequence.yaml";
+  writeFile(yaml, "name: a\xeb\nmodel: city\n");
+  auto loaded = loadSequence(folder);
+  ASSERT_FALSE(loaded.ok());
+  EXPECT_NE(loaded.error().message.find("not valid UTF-8"), std::string::npos) << loaded.error().message;
+  for (const char c : loaded.error().message) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 || c == 0x7f);
+}
+
 TEST(YamlFiles, UnterminatedQuotedStringIsRefused) {
   TempDir dir("limits_quote");
   const std::string camera = dir.file("camera.yaml");

@@ -130,6 +130,15 @@ TEST(HostileModels, CaoFaceAboveTheLimitIsRefused) {
   expectRefused(loadModel(path), path, "face 0 has 1000000 points, more than the 4096 allowed");
 }
 
+TEST(HostileModels, CaoIncludeNameWithANulByteIsRefusedNamingTheFile) {
+  TempDir dir("hostile_cao_nul");
+  const std::string path = dir.file("nul.cao");
+  writeFile(path, std::string("V1\nload(\"\0x.cao\")\n0\n0\n0\n0\n0\n", 28));
+  const auto loaded = loadModel(path);
+  expectRefused(loaded, path, "holds a control character");
+  for (const char c : loaded.error().message) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 || c == 0x7f);
+}
+
 TEST(HostileModels, CaoCombAtTheLimitTriangulatesExactly) {
   // 4,094 corners, half of them reflex: quadratic at worst, not cubic.
   const std::vector<Eigen::Vector2d> points = comb(1023);

@@ -57,7 +57,7 @@ Result<std::vector<double>> parseNumbers(const std::string& text, const std::str
     char* end = nullptr;
     const double d = std::strtod(token.c_str(), &end);
     if (end == token.c_str() || *end != '\0') {
-      return makeError(ErrorCode::kInvalidArgument, text::cat(what, ": '", token, "' is not a number"));
+      return makeError(ErrorCode::kInvalidArgument, text::cat(what, ": ", text::shown(token), " is not a number"));
     }
     if (!std::isfinite(d)) return makeError(ErrorCode::kInvalidArgument, text::cat(what, ": non-finite value"));
     v.push_back(d);

@@ -396,6 +396,9 @@ Result<Sequence> loadSequence(const std::string& directory) {
       if (!s.ok()) return s.error();
       seq.model = *s;
     }
+    // What save refuses, load refuses: the name and model path are UTF-8.
+    VKLOC_TRY_STATUS(checkUtf8(seq.name, "name", yaml_path));
+    VKLOC_TRY_STATUS(checkUtf8(seq.model, "model", yaml_path));
     if (const YAML::Node n = root["T_world_model"]; n) {
       auto T = yamlPose(yaml_path, n, "T_world_model");
       if (!T.ok()) return T.error();

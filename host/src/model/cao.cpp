@@ -233,6 +233,10 @@ struct CaoParser {
       if (q1 == std::string::npos) return lineError(line.number, "load() needs a quoted file name");
       const std::string rel(line.text.substr(q0 + 1, q1 - q0 - 1));
       const std::string params(line.text.substr(q1 + 1));
+      if (std::any_of(rel.begin(), rel.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; })) {
+        // A NUL would cut the path short and open the including folder.
+        return lineError(line.number, fmt::format("load(): file name {} holds a control character", text::shown(rel)));
+      }
       Eigen::Vector3d t = Eigen::Vector3d::Zero(), tu = Eigen::Vector3d::Zero();
       if (auto p = loadParameter(params, "t"); p && !parseVector3(*p, false, t)) {
         return lineError(line.number, "load(): t= needs three numbers, e.g. t=[0.1; 0; 0]");
@@ -270,7 +274,7 @@ struct CaoParser {
       const CaoLine& line = lines[li++];
       const std::vector<std::string> tokens = splitWhitespace(line.text);
       if (!parseIndex(tokens[0], count)) {
-        return lineError(line.number, fmt::format("expected the number of {}, found '{}'", what, tokens[0]));
+        return lineError(line.number, fmt::format("expected the number of {}, found {}", what, text::shown(tokens[0])));
       }
       if (count > kMaxCaoCount) {
         return lineError(line.number, fmt::format("{} {} is more than the {} allowed", count, what, kMaxCaoCount));
