@@ -1,8 +1,18 @@
 # One bounded libFuzzer run for ctest: cmake -DFUZZER=exe -DSEEDS=dir -DWORK=dir -DSECONDS=n
-#   -DMAX_LEN=bytes -DTIMEOUT=s -DRSS_MB=mb [-DDICT=file] -P run_fuzzer.cmake
+#   -DMAX_LEN=bytes -DTIMEOUT=s -DRSS_MB=mb [-DDICT=file] [-DFINDINGS=dir] -P run_fuzzer.cmake
 # New inputs go to WORK/corpus (kept between runs); the seed folder is only read. A crash, leak,
 # timeout, out-of-memory or violated property fails the test and leaves the input in WORK.
 file(MAKE_DIRECTORY ${WORK}/corpus)
+# Past findings first, as regression inputs: each must now pass (known findings only report).
+if(FINDINGS AND IS_DIRECTORY ${FINDINGS})
+  file(GLOB regressions ${FINDINGS}/*)
+  if(regressions)
+    execute_process(COMMAND ${FUZZER} -timeout=${TIMEOUT} -rss_limit_mb=${RSS_MB} ${regressions} RESULT_VARIABLE rc)
+    if(NOT rc EQUAL 0)
+      message(FATAL_ERROR "${FUZZER} fails on a past finding in ${FINDINGS} (${rc})")
+    endif()
+  endif()
+endif()
 set(args ${WORK}/corpus ${SEEDS} -max_total_time=${SECONDS} -timeout=${TIMEOUT} -rss_limit_mb=${RSS_MB}
   -max_len=${MAX_LEN} -artifact_prefix=${WORK}/ -print_final_stats=1)
 if(DICT)

@@ -290,5 +290,29 @@ TEST(ModelRoundTripFiles, ReportsBadPathsOptionsAndFormats) {
   EXPECT_TRUE(fs::is_empty(dir.path()));
 }
 
+TEST(ModelRoundTripFiles, DracoRefusesToWriteWhatItsQuantizationCollapses) {
+  test::TempDir dir("vkloc_write_collapse");
+  // One sliver 1e-5 high on a base 1 long: it has an area (load accepts it), but 14-bit
+  // quantization of its bounds (steps of 1/16383) puts all three corners on one line.
+  Model sliver;
+  sliver.source = "sliver";
+  sliver.positions = {0, 0, 0, 1, 0, 0, 0.5f, 1e-5f, 0};
+  sliver.indices = {0, 1, 2};
+  sliver.materials.push_back(Material{"paint", {1, 1, 1, 1}, -1});
+  sliver.ranges.push_back(DrawRange{0, 3, 0});
+  buildBlocks(sliver, 32768);
+  ASSERT_TRUE(saveModel(sliver, dir.file("sliver.ply")).ok());
+  const std::string path = dir.file("sliver.drc");
+  const Status s = saveModel(sliver, path);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().code, ErrorCode::kInvalidArgument);
+  EXPECT_NE(s.error().message.find("collapses every triangle"), std::string::npos) << s.error().message;
+  EXPECT_FALSE(fs::exists(path));
+  ModelWriteOptions fine;
+  fine.draco_position_bits = 30;
+  ASSERT_TRUE(saveModel(sliver, path, fine).ok());
+  EXPECT_TRUE(loadModel(path).ok());
+}
+
 }  // namespace
 }  // namespace vkloc

@@ -348,7 +348,7 @@ Result<PinholeCamera> loadCamera(const std::string& path) {
     const std::string model = node["model"].as<std::string>();
     if (model != "pinhole") {
       return makeError(ErrorCode::kUnsupported,
-                       fmt::format("{}: camera model '{}' is not supported here (use pinhole)", path, model));
+                       fmt::format("{}: camera model {} is not supported here (use pinhole)", path, shown(model)));
     }
   }
   PinholeCamera cam;

@@ -40,6 +40,12 @@ struct Primitive {
 /// "<path>: <what>" as an Error, forced onto one line.
 Error fileError(ErrorCode code, const std::string& path, const std::string& what);
 
+/// Whether one triangle of `indices` (3 per triangle, in range of `positions`, x y z per vertex,
+/// finite) has an area: twice its area, |u x v|, exceeds what rounding the corners to float can
+/// make of a degenerate one, 8 eps M (|u| + |v| + |w|), M the largest coordinate magnitude of its
+/// corners.
+bool hasTriangleWithArea(const std::vector<float>& positions, const std::vector<uint32_t>& indices);
+
 /// `text` with line breaks and other control characters replaced by spaces.
 std::string oneLine(std::string text);
 

@@ -225,6 +225,22 @@ bool decodeTexture(const uint8_t* data, size_t size, Texture& out, std::string& 
   return true;
 }
 
+bool hasTriangleWithArea(const std::vector<float>& positions, const std::vector<uint32_t>& indices) {
+  constexpr double kEps = 1.1920928955078125e-07;  // float epsilon, 2^-23
+  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    const float* a = &positions[3 * size_t{indices[t]}];
+    const float* b = &positions[3 * size_t{indices[t + 1]}];
+    const float* c = &positions[3 * size_t{indices[t + 2]}];
+    const Eigen::Vector3d pa(a[0], a[1], a[2]), pb(b[0], b[1], b[2]), pc(c[0], c[1], c[2]);
+    const Eigen::Vector3d u = pb - pa, v = pc - pa;
+    const double magnitude = std::max({pa.cwiseAbs().maxCoeff(), pb.cwiseAbs().maxCoeff(), pc.cwiseAbs().maxCoeff()});
+    const double noise = 8.0 * kEps * magnitude * (u.norm() + v.norm() + (pc - pb).norm());
+    const double twice_area = u.cross(v).norm();
+    if (twice_area > noise && twice_area > 0.0) return true;
+  }
+  return false;
+}
+
 }  // namespace model_detail
 
 namespace {
@@ -240,21 +256,9 @@ Error modelError(const Model& model, const std::string& what) {
 bool finite3(const float* p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
 
 // A model whose triangles all have no area (corners on one point or one line) has no edges to
-// render or track. A triangle has area when twice its area, |u x v|, exceeds what rounding the
-// corners to float can make of a degenerate one: 8 eps M (|u| + |v| + |w|), M the largest
-// coordinate magnitude of its corners. Precondition: finite positions, indices in range.
+// render or track. Precondition: finite positions, indices in range.
 Status checkArea(const Model& model) {
-  constexpr double kEps = 1.1920928955078125e-07;  // float epsilon, 2^-23
-  for (size_t t = 0; t + 2 < model.indices.size(); t += 3) {
-    const float* a = &model.positions[3 * size_t{model.indices[t]}];
-    const float* b = &model.positions[3 * size_t{model.indices[t + 1]}];
-    const float* c = &model.positions[3 * size_t{model.indices[t + 2]}];
-    const Eigen::Vector3d pa(a[0], a[1], a[2]), pb(b[0], b[1], b[2]), pc(c[0], c[1], c[2]);
-    const Eigen::Vector3d u = pb - pa, v = pc - pa;
-    const double magnitude = std::max({pa.cwiseAbs().maxCoeff(), pb.cwiseAbs().maxCoeff(), pc.cwiseAbs().maxCoeff()});
-    const double noise = 8.0 * kEps * magnitude * (u.norm() + v.norm() + (pc - pb).norm());
-    if (u.cross(v).norm() > noise && u.cross(v).norm() > 0.0) return Status::success();
-  }
+  if (model_detail::hasTriangleWithArea(model.positions, model.indices)) return Status::success();
   return modelError(model, fmt::format("none of the model's {} triangles has an area (the corners of each lie on one "
                                        "point or line): there is nothing to render or track",
                                        model.triangleCount()));

@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "model/model_internal.hpp"
 #include "vkloc/core/atomic_file.hpp"
 
 namespace vkloc {
@@ -313,6 +314,7 @@ struct DracoBlob {
   int position_id = -1, uv_id = -1, color_id = -1;  ///< Attribute unique ids, -1 when absent.
   uint32_t decoded_points = 0, decoded_faces = 0;
   std::array<float, 3> min{}, max{};  ///< Bounds of the decoded (dequantized) positions.
+  bool has_area = false;              ///< Whether a decoded triangle has an area.
 };
 
 /// Encodes vertices (positions, optional uvs and RGBA colours) and triangles; `flip_v` stores
@@ -374,17 +376,34 @@ Result<DracoBlob> encodeDraco(const std::vector<float>& positions, const std::ve
   if (!p) return fileError(ErrorCode::kIoError, path, "Draco round trip lost the positions");
   blob.min = {1e30f, 1e30f, 1e30f};
   blob.max = {-1e30f, -1e30f, -1e30f};
+  std::vector<float> decoded_positions;
+  decoded_positions.reserve(3 * size_t{blob.decoded_points});
   for (uint32_t i = 0; i < blob.decoded_points; ++i) {
     float v[3];
     p->GetMappedValue(draco::PointIndex(i), v);
     for (int k = 0; k < 3; ++k) blob.min[k] = std::min(blob.min[k], v[k]), blob.max[k] = std::max(blob.max[k], v[k]);
+    decoded_positions.insert(decoded_positions.end(), v, v + 3);
   }
+  std::vector<uint32_t> decoded_indices;
+  decoded_indices.reserve(3 * size_t{blob.decoded_faces});
+  for (uint32_t f = 0; f < blob.decoded_faces; ++f) {
+    for (const draco::PointIndex& i : back->face(draco::FaceIndex(f))) decoded_indices.push_back(i.value());
+  }
+  blob.has_area = model_detail::hasTriangleWithArea(decoded_positions, decoded_indices);
   return blob;
 }
 
 Status writeDrc(const Model& m, const std::string& path, const ModelWriteOptions& o, AtomicFileSet& files) {
   auto blob = encodeDraco(m.positions, m.uvs, m.colors, m.indices, true, o, path);
   if (!blob.ok()) return blob.error();
+  // What load would refuse is not written: quantization can collapse every triangle of a model
+  // that is small against its bounds.
+  if (!blob->has_area) {
+    return fileError(ErrorCode::kInvalidArgument, path,
+                     fmt::format("Draco's {}-bit position quantization collapses every triangle; save with more "
+                                 "position bits or as .ply/.obj",
+                                 o.draco_position_bits));
+  }
   return files.write(path, blob->bytes.data(), blob->bytes.size());
 }
 
