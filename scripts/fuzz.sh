@@ -8,7 +8,7 @@
 #     -t SECONDS  time per target (default 600)
 #     -j JOBS     targets run at the same time (default 1)
 #     --strict    known findings (tests/fuzz/known_findings.txt) fail too (leaks inside
-#                 third-party libraries stay suppressed: tests/fuzz/lsan.supp)
+#                 third-party libraries stay suppressed: tests/sanitizers/lsan.supp)
 #     --keep-going  fork mode: a crash, timeout or OOM is saved and fuzzing goes on (for a target
 #                 whose first finding is known and not fixed yet)
 #     --list      print the target names and exit
@@ -69,7 +69,7 @@ run_one() {
     "-artifact_prefix=$findings/" -print_final_stats=1)
   if [ -n "$dict" ]; then args+=("-dict=$dict"); fi
   if [ "$keep_going" -eq 1 ]; then args+=(-fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1); fi
-  VKLOC_FUZZ_KNOWN="$known" LSAN_OPTIONS="suppressions=$PWD/tests/fuzz/lsan.supp" "$exe" "${args[@]}" >"build/fuzz/logs/$name.log" 2>&1 || true
+  VKLOC_FUZZ_KNOWN="$known" LSAN_OPTIONS="suppressions=$PWD/tests/sanitizers/lsan.supp" "$exe" "${args[@]}" >"build/fuzz/logs/$name.log" 2>&1 || true
 }
 
 running=0
