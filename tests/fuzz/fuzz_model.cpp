@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "fuzz_common.hpp"
@@ -59,7 +60,17 @@ std::vector<float> cornerCoordinates(const Model& m, int a) {
 
 void checkRoundTrip(const Model& model) {
   const std::string saved = scratchPath(std::string("saved") + kExt);
-  const Status st = saveModel(model, saved);
+  Status st = saveModel(model, saved);
+  if (!st.ok() && std::string_view(kExt) == ".drc" && st.error().code == ErrorCode::kInvalidArgument) {
+    // Draco refuses, with its reason, a model its quantization collapses (load would refuse the
+    // file): triangles tiny against the bounds. 30 bits may still not hold it.
+    check(st.error().message.find("collapses every triangle") != std::string::npos,
+          (kTarget + ".save_refusal_explained").c_str(), st.error().message);
+    ModelWriteOptions fine;
+    fine.draco_position_bits = 30;
+    st = saveModel(model, saved, fine);
+    if (!st.ok() && st.error().message.find("collapses every triangle") != std::string::npos) return;
+  }
   check(st.ok(), (kTarget + ".save_accepts_loaded").c_str(), st.ok() ? "" : st.error().message);
   if (!st.ok()) return;
   const auto again = loadModel(saved);

@@ -233,6 +233,7 @@ struct CaoParser {
       if (q1 == std::string::npos) return lineError(line.number, "load() needs a quoted file name");
       const std::string rel(line.text.substr(q0 + 1, q1 - q0 - 1));
       const std::string params(line.text.substr(q1 + 1));
+      if (rel.empty()) return lineError(line.number, "load() needs a file name");
       if (std::any_of(rel.begin(), rel.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; })) {
         // A NUL would cut the path short and open the including folder.
         return lineError(line.number, fmt::format("load(): file name {} holds a control character", text::shown(rel)));
@@ -258,7 +259,10 @@ struct CaoParser {
         return lineError(line.number, fmt::format("load(): file {} not found", child.string()));
       }
       const bool saved = versionTwo_;
-      VKLOC_TRY_STATUS(parse(child.string(), T * poseFromTranslationAxisAngle(t, tu), out));
+      // The include's error names the including file and line too.
+      if (const Status included = parse(child.string(), T * poseFromTranslationAxisAngle(t, tu), out); !included.ok()) {
+        return lineError(line.number, fmt::format("load({}): {}", text::shown(rel), included.error().message));
+      }
       versionTwo_ = saved;
     }
 
