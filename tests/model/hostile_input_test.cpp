@@ -139,6 +139,16 @@ TEST(HostileModels, CaoIncludeNameWithANulByteIsRefusedNamingTheFile) {
   for (const char c : loaded.error().message) EXPECT_FALSE(static_cast<unsigned char>(c) < 0x20 || c == 0x7f);
 }
 
+TEST(HostileModels, CaoIncludeErrorsNameTheIncludingFile) {
+  TempDir dir("hostile_cao_include");
+  const std::string empty = dir.file("empty.cao");
+  writeFile(empty, "V1\nload(\"\")\n");
+  expectRefused(loadModel(empty), empty, "load() needs a file name");
+  const std::string folder = dir.file("folder.cao");
+  writeFile(folder, "V1\nload(\".\")\n");
+  expectRefused(loadModel(folder), folder, "load('.')");
+}
+
 TEST(HostileModels, CaoCombAtTheLimitTriangulatesExactly) {
   // 4,094 corners, half of them reflex: quadratic at worst, not cubic.
   const std::vector<Eigen::Vector2d> points = comb(1023);
