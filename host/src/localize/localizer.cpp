@@ -145,6 +145,17 @@ std::optional<EdgeReference> slowPoints(const EdgeReference& reference, const Po
   return out;
 }
 
+/// An untracked frame: the motion prior's bridged pose (inertial) when it has one, else lost.
+void applyBridge(const std::optional<BridgedPose>& bridged, LocalizationResult& out) {
+  if (bridged) {
+    out.state = TrackingState::kInertial;
+    out.T_world_camera = bridged->T_world_camera;
+    out.covariance = bridged->covariance;
+  } else {
+    out.state = TrackingState::kLost;
+  }
+}
+
 }  // namespace
 
 Result<LocalizerBackend> parseLocalizerBackend(const std::string& name) {
@@ -682,14 +693,7 @@ struct Localizer::Impl {
     const Pose guess = guess_given ? *guess_given : prediction->T_world_camera;
     out.T_world_camera = guess;
     if (prediction && prediction->inertial) out.inertial_sigma_m = prediction->sigma_m;
-    const std::optional<BridgedPose> bridged = motion->bridge(t_ns, prediction, guess);
-    if (bridged) {
-      out.state = TrackingState::kInertial;
-      out.T_world_camera = bridged->T_world_camera;
-      out.covariance = bridged->covariance;
-    } else {
-      out.state = TrackingState::kLost;
-    }
+    applyBridge(motion->bridge(t_ns, prediction, guess), out);
     keyframes->frameNotTracked();  // the next frame aligns against a keyframe made at its guess
     ++untracked;
     if (const Keyframe* current = keyframes->current().get()) {
@@ -1200,14 +1204,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     m.last_tracked_gray->t_ns = t_ns;
   } else {
     m.keyframes->frameNotTracked();
-    const std::optional<BridgedPose> bridged = m.motion->bridge(t_ns, prediction, guess);
-    if (bridged) {
-      out.state = TrackingState::kInertial;
-      out.T_world_camera = bridged->T_world_camera;
-      out.covariance = bridged->covariance;
-    } else {
-      out.state = TrackingState::kLost;
-    }
+    applyBridge(m.motion->bridge(t_ns, prediction, guess), out);
   }
 
   // 5b. Relocalization (with a keyframe database): a frame not tracked after

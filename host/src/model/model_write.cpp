@@ -41,15 +41,8 @@ using json = nlohmann::json;
 
 static_assert(std::endian::native == std::endian::little, "the PLY and GLB writers assume a little-endian host");
 
-Error fileError(ErrorCode code, const std::string& path, const std::string& what) {
-  return makeError(code, path + ": " + what);
-}
-
-std::string lowerExtension(const std::string& path) {
-  std::string ext = fs::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
+using model_detail::fileError;
+using model_detail::lowerExtension;
 
 /// `text` with every character outside [A-Za-z0-9._-] replaced by '_' (safe in OBJ/MTL
 /// statements and glTF URIs without escaping).
