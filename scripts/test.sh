@@ -1,36 +1,61 @@
 #!/usr/bin/env bash
-# Installs dependencies (as root), builds with -Werror and runs the whole test suite: unit tests,
-# Vulkan tests on the available device (lavapipe without a GPU) with the validation layer on,
-# command-line tests, the installed package used by an outside program, the accuracy runs; then
-# the unit, Vulkan and command-line tests again under AddressSanitizer + UBSan + LeakSanitizer
-# (preset asan), the multi-threaded tests under ThreadSanitizer (preset tsan), and every fuzz
-# target for a bounded time (preset fuzz, VKLOC_FUZZ_SECONDS each).
-# Arguments go to the main ctest run and skip the sanitizer and fuzz stages, e.g.
-# `scripts/test.sh -L unit` (labels: unit, vulkan, cli, install, format, accuracy, visp).
-# Labels "open" (requirements not met yet) and "soak" (one hour) are not run here.
+# Installs dependencies (as root), builds with -Werror and runs the whole test suite:
+#   1. preset ci (release, -Werror): the accuracy runs, the installed package used by an outside
+#      program, formatting and layering, the ViSP comparison;
+#   2. preset asan: unit tests, Vulkan tests on the available device (lavapipe without a GPU,
+#      validation layer on) and command-line tests under AddressSanitizer + UBSan + LeakSanitizer;
+#   3. preset tsan: the multi-threaded tests under ThreadSanitizer;
+#   4. preset fuzz: every fuzz target for VKLOC_FUZZ_SECONDS with a fixed seed (reproducible).
+# Arguments go to the ctest run of preset ci instead, which then runs every label it is given
+# and skips stages 2-4, e.g. `scripts/test.sh -L unit` (labels: unit, vulkan, cli, install,
+# format, accuracy, visp). Labels "open" (requirements not met yet) and "soak" (one hour) are
+# never run here. Each stage's wall time is printed at the end, also after a failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ "$(id -u)" -eq 0 ]; then bash scripts/install-deps.sh; fi
-stage() { echo "test.sh: [$(date +%H:%M:%S)] $*"; }
+stages=()
+stage_start=$SECONDS
+stage_name=""
+stage() {
+  if [ -n "$stage_name" ]; then stages+=("$(printf '%5d s  %s' $((SECONDS - stage_start)) "$stage_name")"); fi
+  stage_name="$*"
+  stage_start=$SECONDS
+  echo "test.sh: [$(date +%H:%M:%S)] $*"
+}
+summary() {
+  local rc=$?
+  stage ""
+  echo "test.sh: stage wall times (total $SECONDS s, exit $rc):"
+  printf 'test.sh: %s\n' "${stages[@]}"
+}
+trap summary EXIT
+if [ "$(id -u)" -eq 0 ]; then
+  stage "install dependencies"
+  bash scripts/install-deps.sh
+fi
 stage "build (preset ci)"
 cmake --preset ci >/dev/null
 cmake --build --preset ci
 echo "test.sh: not run (label 'open', requirements not met yet):"
 ctest --preset ci -N -L open | grep -E "Test +#" || true
-stage "tests (preset ci)"
-ctest --preset ci -j "$(nproc)" -LE "open|soak" "$@"
-if [ "$#" -eq 0 ]; then
-  stage "unit, Vulkan and command-line tests under ASan + UBSan + LSan (preset asan)"
-  cmake --preset asan >/dev/null
-  cmake --build --preset asan
-  ctest --preset asan -j "$(nproc)"
-  stage "multi-threaded tests under ThreadSanitizer (preset tsan)"
-  cmake --preset tsan >/dev/null
-  cmake --build --preset tsan
-  ctest --preset tsan -j "$(nproc)"
-  stage "fuzz targets, bounded runs (preset fuzz)"
-  cmake --preset fuzz >/dev/null
-  cmake --build --preset fuzz
-  ctest --preset fuzz -j "$(nproc)"
-  stage "done"
+if [ "$#" -gt 0 ]; then
+  stage "tests (preset ci) $*"
+  ctest --preset ci -j "$(nproc)" -LE "open|soak" "$@"
+  exit 0
 fi
+stage "accuracy, install, format and ViSP tests (preset ci)"
+ctest --preset ci -j "$(nproc)" -LE "open|soak|unit|vulkan|cli"
+stage "build (preset asan)"
+cmake --preset asan >/dev/null
+cmake --build --preset asan
+stage "unit, Vulkan and command-line tests under ASan + UBSan + LSan (preset asan)"
+ctest --preset asan -j "$(nproc)"
+stage "build (preset tsan)"
+cmake --preset tsan >/dev/null
+cmake --build --preset tsan
+stage "multi-threaded tests under ThreadSanitizer (preset tsan)"
+ctest --preset tsan -j "$(nproc)"
+stage "build (preset fuzz)"
+cmake --preset fuzz >/dev/null
+cmake --build --preset fuzz
+stage "fuzz targets, bounded reproducible runs (preset fuzz)"
+ctest --preset fuzz -j "$(nproc)"

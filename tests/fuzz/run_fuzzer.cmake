@@ -1,7 +1,14 @@
 # One bounded libFuzzer run for ctest: cmake -DFUZZER=exe -DSEEDS=dir -DWORK=dir -DSECONDS=n
-#   -DMAX_LEN=bytes -DTIMEOUT=s -DRSS_MB=mb [-DDICT=file] [-DFINDINGS=dir] -P run_fuzzer.cmake
-# New inputs go to WORK/corpus (kept between runs); the seed folder is only read. A crash, leak,
-# timeout, out-of-memory or violated property fails the test and leaves the input in WORK.
+#   -DMAX_LEN=bytes -DTIMEOUT=s -DRSS_MB=mb -DSEED=n [-DDICT=file] [-DFINDINGS=dir] -P run_fuzzer.cmake
+# New inputs go to WORK/corpus; the seed folder is only read. A crash, leak, timeout,
+# out-of-memory or violated property fails the test and leaves the input in WORK.
+# SEED other than 0: a reproducible run. It starts from the seed folder alone (WORK/corpus is
+# emptied) with that random seed, so every machine runs the same inputs in the same order and a
+# slower one runs a prefix of them; a failure in CI fails the same way here. SEED 0: a new
+# random seed and the corpus kept from earlier runs (exploration; scripts/fuzz.sh runs longer).
+if(NOT SEED EQUAL 0)
+  file(REMOVE_RECURSE ${WORK}/corpus)
+endif()
 file(MAKE_DIRECTORY ${WORK}/corpus)
 # Past findings first, as regression inputs: each must now pass (known findings only report).
 if(FINDINGS AND IS_DIRECTORY ${FINDINGS})
@@ -14,7 +21,7 @@ if(FINDINGS AND IS_DIRECTORY ${FINDINGS})
   endif()
 endif()
 set(args ${WORK}/corpus ${SEEDS} -max_total_time=${SECONDS} -timeout=${TIMEOUT} -rss_limit_mb=${RSS_MB}
-  -max_len=${MAX_LEN} -artifact_prefix=${WORK}/ -print_final_stats=1)
+  -max_len=${MAX_LEN} -artifact_prefix=${WORK}/ -print_final_stats=1 -seed=${SEED})
 if(DICT)
   list(APPEND args -dict=${DICT})
 endif()

@@ -487,6 +487,10 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
                            fmt::format("{} {} has a list of {} values", e.name, i, length));
         }
         const bool indices = is_face && (p.name == "vertex_indices" || p.name == "vertex_index");
+        // assimp's post-processing reads past a face without corners (a fuzz finding).
+        if (indices && length == 0) {
+          return fileError(ErrorCode::kMalformedInput, path, fmt::format("face {} has no vertices", i));
+        }
         if (indices && length > static_cast<double>(kMaxPolygonVertices)) {
           return fileError(ErrorCode::kUnsupported, path,
                            fmt::format("face {} has {} vertices, more than the {} allowed in one polygon", i, length,
