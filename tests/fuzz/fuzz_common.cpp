@@ -21,6 +21,18 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string makeScratchDir() {
+  std::error_code ec;
+  // A fixed folder (run_fuzzer.cmake) keeps the paths the target compares the same from run to
+  // run, so that a seeded run repeats itself.
+  if (const char* fixed = std::getenv("VKLOC_FUZZ_SCRATCH"); fixed && *fixed) {
+    fs::remove_all(fixed, ec);
+    fs::create_directories(fixed, ec);
+    if (ec) {
+      std::fprintf(stderr, "vkloc fuzz: cannot create %s: %s\n", fixed, ec.message().c_str());
+      std::abort();
+    }
+    return fixed;
+  }
   std::string base = "/dev/shm";
   if (access(base.c_str(), W_OK) != 0) {
     const char* tmp = std::getenv("TMPDIR");
@@ -28,7 +40,6 @@ std::string makeScratchDir() {
   }
   // Folders of earlier runs that crashed (atexit does not run on abort) are removed here.
   const std::string prefix = "vkloc_fuzz_";
-  std::error_code ec;
   for (const fs::directory_entry& e : fs::directory_iterator(base, ec)) {
     const std::string name = e.path().filename().string();
     if (name.rfind(prefix, 0) != 0) continue;

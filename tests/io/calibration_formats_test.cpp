@@ -368,6 +368,13 @@ D: !!opencv-matrix
                                     "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
                                     "   data: [ 500., 0., 320., 0., 500., 240., 0., 0. ]\n");
   expectError(loadCalibration(wrong), ErrorCode::kMalformedInput, wrong, {"field 'camera_matrix'", "8"});
+  // rows x cols is not computed with overflow (fuzz finding): 3689348814741910325 x 5 wraps to 9.
+  const std::string huge = fixture(dir, "huge.yml",
+                                   "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
+                                   "camera_matrix: !!opencv-matrix\n   rows: 3689348814741910325\n   cols: 5\n"
+                                   "   dt: d\n   data: [ 500., 0., 320., 0., 500., 240., 0., 0., 1. ]\n");
+  expectError(loadCalibration(huge), ErrorCode::kMalformedInput, huge,
+              {"field 'camera_matrix'", "3689348814741910325x5 matrix but 'data' holds 9 numbers"});
   const std::string nan = fixture(dir, "nan.yml",
                                   "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n"
                                   "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"

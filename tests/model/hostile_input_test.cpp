@@ -225,6 +225,12 @@ TEST(HostileModels, ModelWithoutAreaIsRefused) {
                         "z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 "
                         "0\n3 0 1 2\n0\n"));
   expectRefused(loadModel(ply), ply, "face 1 has no vertices");
+  // An element name that starts with a digit is refused before assimp reads it as a count.
+  ASSERT_TRUE(writeFile(ply,
+                        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float "
+                        "z\nelement 4294967295face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 "
+                        "0\n0 1 0\n3 0 1 2\n"));
+  expectRefused(loadModel(ply), ply, "element name '4294967295face' does not start with a letter");
   // One real triangle among degenerate ones is enough.
   ASSERT_TRUE(writeFile(line, "v 0 0 0\nv 1 1 1\nv 2 2 2\nv 0 1 0\nf 1 2 3\nf 1 2 4\n"));
   EXPECT_TRUE(loadModel(line).ok());

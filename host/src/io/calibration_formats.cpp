@@ -130,7 +130,9 @@ Result<std::vector<double>> readNumbers(const Where& w, const YAML::Node& node, 
           !text::parseInt64(text::trim(cols.Scalar()), c).empty() || r < 0 || c < 0) {
         return w.at(node).field(key, "'rows' and 'cols' must be whole numbers");
       }
-      if (static_cast<uint64_t>(r * c) != numbers->size()) {
+      // Each of r and c is at most the count before they are multiplied (no overflow).
+      const auto count = static_cast<int64_t>(numbers->size());
+      if (r > count || c > count || r * c != count) {
         return w.at(data).field(key, fmt::format("{}x{} matrix but 'data' holds {} numbers", r, c, numbers->size()));
       }
     }

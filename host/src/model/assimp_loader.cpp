@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <assimp/Importer.hpp>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -396,6 +397,11 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
       PlyElement e;
       if (t.size() != 3) return bad("expected 'element <name> <count>'");
       e.name = std::string(t[1]);
+      // assimp reads a name that starts with a digit as a number (a fuzz finding: "element
+      // 4294967295face 4" made it allocate 96 GiB).
+      if (!(std::isalpha(static_cast<unsigned char>(e.name[0])) || e.name[0] == '_')) {
+        return bad("element name '" + quote(t[1]) + "' does not start with a letter");
+      }
       const auto [end, ec] = std::from_chars(t[2].data(), t[2].data() + t[2].size(), e.count);
       if (ec != std::errc() || end != t[2].data() + t[2].size()) {
         return bad("element count '" + quote(t[2]) + "' is not a number");
