@@ -8,6 +8,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <assimp/Exporter.hpp>
@@ -400,6 +402,44 @@ TEST(ModelIo, LoadsPlyWithVertexColors) {
   ASSERT_TRUE(plain.ok()) << plain.error().message;
   expectQuad(*plain, {0, 0, 0}, false, false);
   EXPECT_EQ(plain->materials.at(0).base_color, Material{}.base_color);
+}
+
+TEST(ModelIo, PlyPolygonsTexcoordsAndColourTypes) {
+  TempDir dir("modelio");
+  // A quad (one face of 4 corners), a line and a point (dropped: no area), an unused vertex,
+  // texture coordinates named u/v, 16-bit colours.
+  const std::string header =
+      "element vertex 5\nproperty float x\nproperty float y\nproperty float z\nproperty float u\n"
+      "property float v\nproperty ushort red\nproperty ushort green\nproperty ushort blue\n"
+      "element face 3\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string ascii = dir.file("quad.ply");
+  ASSERT_TRUE(writeFile(ascii, "ply\nformat ascii 1.0\n" + header +
+                                   "0 0 0 0 0 65535 0 0\n1 0 0 1 0 0 65535 0\n1 1 0 1 1 0 0 65535\n"
+                                   "0 1 0 0 1 32768 32768 32768\n5 5 5 0 0 0 0 0\n4 0 1 2 3\n2 0 1\n1 2\n"));
+  auto model = loadModel(ascii);
+  ASSERT_TRUE(model.ok()) << model.error().message;
+  ASSERT_EQ(model->triangleCount(), 2u);
+  ASSERT_EQ(model->vertexCount(), 4u);
+  ASSERT_EQ(model->colors.size(), 16u);
+  ASSERT_EQ(model->uvs.size(), 8u);
+  for (size_t v = 0; v < 4; ++v) {
+    const float* p = &model->positions[3 * v];
+    SCOPED_TRACE(fmt::format("vertex {} at ({}, {})", v, p[0], p[1]));
+    // u = x, v = y in the file; vkloc's v grows downwards.
+    EXPECT_FLOAT_EQ(model->uvs[2 * v], p[0]);
+    EXPECT_FLOAT_EQ(model->uvs[2 * v + 1], 1.0f - p[1]);
+    EXPECT_EQ(model->colors[4 * v + 3], 255);  // no alpha: opaque
+  }
+  EXPECT_EQ(model->colors[0], 255);   // 65535 of 65535
+  EXPECT_EQ(model->colors[12], 128);  // 32768 of 65535
+  // Both triangles face +z (the quad's orientation kept).
+  for (size_t t = 0; t < 2; ++t) {
+    const uint32_t* i = &model->indices[3 * t];
+    const Eigen::Vector3f a(&model->positions[3 * i[0]]), b(&model->positions[3 * i[1]]),
+        c(&model->positions[3 * i[2]]);
+    EXPECT_GT((b - a).cross(c - a).z(), 0.0f);
+  }
+  EXPECT_EQ(model->materials.at(0).base_color, (std::array<float, 4>{1, 1, 1, 1}));
 }
 
 TEST(ModelIo, LoadsGltfWithEmbeddedData) {

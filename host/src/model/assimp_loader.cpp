@@ -1,7 +1,8 @@
-// OBJ (+ MTL), PLY and the other formats assimp reads. OBJ and PLY files are checked before
-// import, because assimp's parsers accept garbage (binary bytes as OBJ, truncated PLY bodies),
-// size arrays from unchecked header counts, and can trip its internal assertions on the
-// result: the checks walk the file and report what is wrong with line or element numbers.
+// OBJ (+ MTL) and the other formats assimp reads, and PLY. OBJ files are checked before import,
+// because assimp's parsers accept garbage (binary bytes as OBJ), size arrays from unchecked
+// counts, and can trip its internal assertions on the result: the check walks the file and
+// reports what is wrong with line numbers. PLY is read here, value by value, without assimp,
+// whose PLY importer crashed and corrupted its heap on damaged files.
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -21,6 +22,7 @@
 
 #include "model/model_internal.hpp"
 #include "vkloc/core/text.hpp"
+#include "vkloc/model/cao.hpp"
 
 // Debian's assimp is built with its internal assertions enabled, and their default handler
 // aborts the process; the hook that replaces it (setAiAssertHandler) is not exported. The
@@ -271,7 +273,7 @@ struct PlyElement {
 };
 
 // Reads the values of a PLY body: binary of either byte order, or ASCII with one element
-// instance per line as assimp reads it.
+// instance per line.
 class PlyReader {
  public:
   PlyReader(std::string_view data, const std::string& format)
@@ -360,7 +362,32 @@ bool plainText(std::string_view text, size_t& offset) {
 
 // Parses a PLY header, then walks the body: every declared element must be present and
 // numeric, vertex positions finite, and face indices below the vertex count.
-Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
+void joinIdenticalVertices(Primitive& prim);
+
+// The value of a colour channel of `type` as 0..1: integers over their type's largest value.
+double plyColorScale(PlyType type) {
+  switch (type) {
+    case PlyType::kInt8:
+      return 127.0;
+    case PlyType::kUint8:
+      return 255.0;
+    case PlyType::kInt16:
+      return 32767.0;
+    case PlyType::kUint16:
+      return 65535.0;
+    case PlyType::kInt32:
+      return 2147483647.0;
+    case PlyType::kUint32:
+      return 4294967295.0;
+    default:
+      return 1.0;
+  }
+}
+
+// Reads a PLY model (ASCII or binary; positions, texture coordinates s/t, u/v, texture_u/v,
+// vertex colours, polygon faces), checking every value first: assimp's PLY importer crashes or
+// corrupts its heap on damaged files (fuzz findings), so it is not used for PLY.
+Result<Model> loadPly(const std::string& path, const std::vector<uint8_t>& bytes) {
   const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   if (text.substr(0, 4) != "ply\n" && text.substr(0, 5) != "ply\r\n") {
     return fileError(ErrorCode::kMalformedInput, path, "not a PLY file (no 'ply' magic line)");
@@ -430,7 +457,7 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
     }
     return bad("unexpected '" + quote(line) + "'");
   });
-  if (!status.ok()) return status;
+  VKLOC_TRY_STATUS(status);
   if (data_offset == 0) {
     return fileError(ErrorCode::kMalformedInput, path, "truncated PLY header (no end_header)");
   }
@@ -449,6 +476,23 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
   if (position[0] < 0 || position[1] < 0 || position[2] < 0) {
     return fileError(ErrorCode::kMalformedInput, path, "PLY has no 'vertex' element with x, y and z properties");
   }
+  // Texture coordinates (first of the usual names) and colour channels of the vertex element.
+  const auto scalarNamed = [&](std::initializer_list<std::string_view> names) {
+    for (const std::string_view name : names) {
+      for (size_t i = 0; i < vertex->properties.size(); ++i) {
+        const PlyProperty& p = vertex->properties[i];
+        if (p.name == name && p.count_type == PlyType::kInvalid) return static_cast<int>(i);
+      }
+    }
+    return -1;
+  };
+  const int uv_index[2] = {scalarNamed({"s", "u", "texture_u", "tx"}), scalarNamed({"t", "v", "texture_v", "ty"})};
+  const bool has_uv = uv_index[0] >= 0 && uv_index[1] >= 0;
+  const int color_index[4] = {scalarNamed({"red", "diffuse_red", "r"}), scalarNamed({"green", "diffuse_green", "g"}),
+                              scalarNamed({"blue", "diffuse_blue", "b"}), scalarNamed({"alpha", "diffuse_alpha", "a"})};
+  const bool has_color = color_index[0] >= 0 || color_index[1] >= 0 || color_index[2] >= 0;
+  Primitive prim;
+  std::vector<uint32_t> corners;  // of the polygons, each preceded by its corner count
   std::string counts;
   for (const PlyElement& e : elements) {
     counts += fmt::format("{}{} {}", counts.empty() ? "" : ", ", e.count, e.name);
@@ -469,7 +513,14 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
             fmt::format("truncated {} PLY: header declares {} but {} {} is missing (end of data or blank line)", format,
                         counts, e.name, i));
       }
+      if ((is_vertex || is_face) && i >= model_detail::kMaxModelElements) {
+        return fileError(
+            ErrorCode::kUnsupported, path,
+            fmt::format("{} {} elements, more than the {} allowed", e.count, e.name, model_detail::kMaxModelElements));
+      }
       double xyz[3] = {0, 0, 0};
+      double uv[2] = {0, 0};
+      double rgba[4] = {0, 0, 0, 1};
       for (size_t j = 0; j < e.properties.size(); ++j) {
         const PlyProperty& p = e.properties[j];
         const auto truncated_property = [&]() {
@@ -482,8 +533,16 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
         double value = 0;
         if (p.count_type == PlyType::kInvalid) {
           if (!reader.next(p.type, value)) return truncated_property();
-          for (int k = 0; k < 3; ++k) {
-            if (is_vertex && static_cast<int>(j) == position[k]) xyz[k] = value;
+          if (is_vertex) {
+            for (int k = 0; k < 3; ++k) {
+              if (static_cast<int>(j) == position[k]) xyz[k] = value;
+            }
+            for (int k = 0; k < 2; ++k) {
+              if (static_cast<int>(j) == uv_index[k]) uv[k] = value;
+            }
+            for (int k = 0; k < 4; ++k) {
+              if (static_cast<int>(j) == color_index[k]) rgba[k] = value / plyColorScale(p.type);
+            }
           }
           continue;
         }
@@ -503,13 +562,15 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
                            fmt::format("face {} has {} vertices, more than the {} allowed in one polygon", i, length,
                                        kMaxPolygonVertices));
         }
+        if (indices) corners.push_back(static_cast<uint32_t>(length));
         for (double k = 0; k < length; ++k) {
           if (!reader.next(p.type, value)) return truncated_property();
-          if (indices && !(value >= 0 && value < static_cast<double>(vertex->count))) {
+          if (indices && !(value >= 0 && value < static_cast<double>(vertex->count) && value == std::floor(value))) {
             return fileError(
                 ErrorCode::kMalformedInput, path,
                 fmt::format("face {} references vertex {} but there are {} vertices", i, value, vertex->count));
           }
+          if (indices) corners.push_back(static_cast<uint32_t>(value));
         }
       }
       if (is_vertex && !(std::isfinite(xyz[0]) && std::isfinite(xyz[1]) && std::isfinite(xyz[2]))) {
@@ -517,16 +578,48 @@ Status checkPly(const std::string& path, const std::vector<uint8_t>& bytes) {
                          fmt::format("vertex {} has non-finite position ({}, {}, {})", i, static_cast<float>(xyz[0]),
                                      static_cast<float>(xyz[1]), static_cast<float>(xyz[2])));
       }
+      if (is_vertex) {
+        for (int k = 0; k < 3; ++k) prim.positions.push_back(static_cast<float>(xyz[k]));
+        if (has_uv) {
+          // PLY's v grows upwards; vkloc's (0, 0) is the image's top-left.
+          prim.uvs.push_back(static_cast<float>(uv[0]));
+          prim.uvs.push_back(static_cast<float>(1.0 - uv[1]));
+        }
+        if (has_color) {
+          for (int k = 0; k < 4; ++k) {
+            const double x = std::isfinite(rgba[k]) ? std::clamp(rgba[k], 0.0, 1.0) : 0.0;
+            prim.colors.push_back(static_cast<uint8_t>(std::lround(255.0 * x)));
+          }
+        }
+      }
     }
   }
-  // Counts are checked once the data is known to be there (a lying header is malformed).
-  for (const PlyElement& e : elements) {
-    if ((e.name == "vertex" || e.name == "face") && e.count > kMaxModelElements) {
-      return fileError(ErrorCode::kUnsupported, path,
-                       fmt::format("{} {} elements, more than the {} allowed", e.count, e.name, kMaxModelElements));
+  // Polygons become triangles (ear clipping keeps their orientation); points and lines are
+  // dropped, as they have no area to render.
+  std::vector<Eigen::Vector3d> loop;
+  for (size_t at = 0; at < corners.size(); at += 1 + corners[at]) {
+    const uint32_t n = corners[at];
+    const uint32_t* face = &corners[at + 1];
+    if (n == 3) {
+      prim.indices.insert(prim.indices.end(), face, face + 3);
+    } else if (n > 3) {
+      loop.clear();
+      for (uint32_t k = 0; k < n; ++k) {
+        const float* q = &prim.positions[3 * size_t{face[k]}];
+        loop.emplace_back(q[0], q[1], q[2]);
+      }
+      for (const uint32_t local : triangulatePolygon(loop)) prim.indices.push_back(face[local]);
     }
   }
-  return Status::success();
+  if (prim.indices.empty()) return fileError(ErrorCode::kMalformedInput, path, "mesh has no triangles");
+  joinIdenticalVertices(prim);
+  Model model;
+  // Vertex colours are the appearance: the base colour that multiplies them is white; without
+  // them, the default grey.
+  model.materials.push_back(Material{"default"});
+  if (has_color) model.materials.back().base_color = {1.0f, 1.0f, 1.0f, 1.0f};
+  VKLOC_TRY_STATUS(appendPrimitive(model, prim, path, "faces"));
+  return model;
 }
 
 // ---- assimp scene -> Model -------------------------------------------------------------------
@@ -588,7 +681,7 @@ class SceneConverter {
   SceneConverter(const std::string& path, const aiScene& scene, std::vector<std::string>& warnings)
       : path_(path), scene_(scene), warnings_(warnings), dir_(fs::path(path).parent_path()) {}
 
-  Result<Model> convert(bool white_when_coloured) {
+  Result<Model> convert() {
     for (unsigned i = 0; i < scene_.mNumMaterials; ++i) {
       model_.materials.push_back(convertMaterial(*scene_.mMaterials[i], i));
     }
@@ -597,14 +690,6 @@ class SceneConverter {
     } else {
       for (unsigned i = 0; i < scene_.mNumMeshes; ++i) {
         VKLOC_TRY_STATUS(addMesh(i, aiMatrix4x4()));
-      }
-    }
-    // Formats without material colours (PLY): the vertex colours are the appearance, so the
-    // base colour that multiplies them is white; without vertex colours, the default grey.
-    if (white_when_coloured) {
-      if (model_.materials.empty()) model_.materials.push_back(Material{"default"});
-      for (Material& m : model_.materials) {
-        m.base_color = model_.colors.empty() ? Material{}.base_color : std::array<float, 4>{1.0f, 1.0f, 1.0f, 1.0f};
       }
     }
     return std::move(model_);
@@ -812,7 +897,7 @@ Result<Model> loadWithAssimp(const std::string& path, const std::string& ext, st
   } else if (ext == ".ply") {
     auto bytes = readFileBytes(path);
     if (!bytes.ok()) return bytes.error();
-    VKLOC_TRY_STATUS(checkPly(path, *bytes));
+    return loadPly(path, *bytes);
   }
   // No logger is created, so assimp logs to its silent default logger. Triangulate polygons,
   // drop points and lines (duplicate vertices are merged exactly in addMesh), and flip v so that (0, 0) is the top-left
@@ -841,7 +926,7 @@ Result<Model> loadWithAssimp(const std::string& path, const std::string& ext, st
     return fileError(ErrorCode::kMalformedInput, path,
                      "cannot import: " + (error.empty() ? std::string("unknown error") : quote(error, 300)));
   }
-  return SceneConverter(path, *scene, warnings).convert(ext == ".ply");
+  return SceneConverter(path, *scene, warnings).convert();
 }
 
 }  // namespace vkloc::model_detail
