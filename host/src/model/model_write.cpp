@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -316,6 +317,27 @@ Result<DracoBlob> encodeDraco(const std::vector<float>& positions, const std::ve
                               const std::vector<uint8_t>& colors, const std::vector<uint32_t>& indices, bool flip_v,
                               const ModelWriteOptions& o, const std::string& path) {
   const uint32_t n = static_cast<uint32_t>(positions.size() / 3);
+  // Draco quantizes each attribute over its range, max - min in float: a range that overflows
+  // makes its encoder crash (a fuzz finding), so such a model is refused.
+  const auto checkRange = [&](const std::vector<float>& values, const std::string& names, const char* what) -> Status {
+    const int components = static_cast<int>(names.size());
+    for (int k = 0; k < components; ++k) {
+      float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
+      for (size_t i = static_cast<size_t>(k); i < values.size(); i += static_cast<size_t>(components)) {
+        lo = std::min(lo, values[i]);
+        hi = std::max(hi, values[i]);
+      }
+      if (!values.empty() && !std::isfinite(hi - lo)) {
+        return fileError(ErrorCode::kInvalidArgument, path,
+                         fmt::format("{} {} spans {:g} to {:g}, more than a float holds: Draco cannot quantize it; "
+                                     "save as .ply, .obj or .gltf",
+                                     what, names[static_cast<size_t>(k)], lo, hi));
+      }
+    }
+    return Status::success();
+  };
+  VKLOC_TRY_STATUS(checkRange(positions, "xyz", "position"));
+  VKLOC_TRY_STATUS(checkRange(uvs, "uv", "texture coordinate"));
   draco::Mesh mesh;
   mesh.set_num_points(n);
   auto add = [&](draco::GeometryAttribute::Type type, int components, draco::DataType dt, bool normalized,
