@@ -362,7 +362,57 @@ bool plainText(std::string_view text, size_t& offset) {
 
 // Parses a PLY header, then walks the body: every declared element must be present and
 // numeric, vertex positions finite, and face indices below the vertex count.
-void joinIdenticalVertices(Primitive& prim);
+// Merges the vertices of `prim` whose position, uv and colour are equal (0 and -0 alike) and
+// drops the ones no triangle uses. assimp's JoinIdenticalVertices is not used: its float
+// tolerance merges distinct corners of tiny coordinates, so a model saved and loaded again could
+// lose every triangle's area (a fuzz finding, tests/fuzz/findings/model_ply).
+void joinIdenticalVertices(Primitive& prim) {
+  struct Key {
+    float value[5] = {0, 0, 0, 0, 0};
+    uint32_t rgba = 0;
+    bool operator==(const Key& o) const { return std::equal(value, value + 5, o.value) && rgba == o.rgba; }
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      uint64_t h = 1469598103934665603ull;  // FNV-1a over the normalised bits
+      for (const float v : k.value) {
+        uint32_t bits = 0;
+        const float normalised = v + 0.0f;  // -0 -> +0, so that equal values hash alike
+        std::memcpy(&bits, &normalised, sizeof bits);
+        h = (h ^ bits) * 1099511628211ull;
+      }
+      return static_cast<size_t>((h ^ k.rgba) * 1099511628211ull);
+    }
+  };
+  const size_t n = prim.positions.size() / 3;
+  for (const uint32_t i : prim.indices) {
+    if (i >= n) return;  // appendPrimitive reports the bad index
+  }
+  const bool has_uv = !prim.uvs.empty(), has_color = !prim.colors.empty();
+  std::vector<uint8_t> used(n, 0);
+  for (const uint32_t i : prim.indices) used[i] = 1;
+  std::unordered_map<Key, uint32_t, KeyHash> first;
+  first.reserve(n);
+  std::vector<uint32_t> remap(n, 0);
+  Primitive out;
+  out.material = prim.material;
+  for (size_t v = 0; v < n; ++v) {
+    if (!used[v]) continue;
+    Key key;
+    std::copy_n(&prim.positions[3 * v], 3, key.value);
+    if (has_uv) std::copy_n(&prim.uvs[2 * v], 2, key.value + 3);
+    if (has_color) std::memcpy(&key.rgba, &prim.colors[4 * v], 4);
+    const auto [it, inserted] = first.emplace(key, static_cast<uint32_t>(out.positions.size() / 3));
+    remap[v] = it->second;
+    if (!inserted) continue;
+    out.positions.insert(out.positions.end(), &prim.positions[3 * v], &prim.positions[3 * v] + 3);
+    if (has_uv) out.uvs.insert(out.uvs.end(), &prim.uvs[2 * v], &prim.uvs[2 * v] + 2);
+    if (has_color) out.colors.insert(out.colors.end(), &prim.colors[4 * v], &prim.colors[4 * v] + 4);
+  }
+  out.indices.reserve(prim.indices.size());
+  for (const uint32_t i : prim.indices) out.indices.push_back(remap[i]);
+  prim = std::move(out);
+}
 
 // The value of a colour channel of `type` as 0..1: integers over their type's largest value.
 double plyColorScale(PlyType type) {
@@ -424,8 +474,8 @@ Result<Model> loadPly(const std::string& path, const std::vector<uint8_t>& bytes
       PlyElement e;
       if (t.size() != 3) return bad("expected 'element <name> <count>'");
       e.name = std::string(t[1]);
-      // assimp reads a name that starts with a digit as a number (a fuzz finding: "element
-      // 4294967295face 4" made it allocate 96 GiB).
+      // Element names are words (assimp, which read PLY before, took "element 4294967295face 4"
+      // for a count and allocated 96 GiB: a fuzz finding).
       if (!(std::isalpha(static_cast<unsigned char>(e.name[0])) || e.name[0] == '_')) {
         return bad("element name '" + quote(t[1]) + "' does not start with a letter");
       }
@@ -553,7 +603,7 @@ Result<Model> loadPly(const std::string& path, const std::vector<uint8_t>& bytes
                            fmt::format("{} {} has a list of {} values", e.name, i, length));
         }
         const bool indices = is_face && (p.name == "vertex_indices" || p.name == "vertex_index");
-        // assimp's post-processing reads past a face without corners (a fuzz finding).
+        // A face without corners is malformed (assimp, which read PLY before, crashed on it).
         if (indices && length == 0) {
           return fileError(ErrorCode::kMalformedInput, path, fmt::format("face {} has no vertices", i));
         }
@@ -623,58 +673,6 @@ Result<Model> loadPly(const std::string& path, const std::vector<uint8_t>& bytes
 }
 
 // ---- assimp scene -> Model -------------------------------------------------------------------
-
-// Merges the vertices of `prim` whose position, uv and colour are equal (0 and -0 alike) and
-// drops the ones no triangle uses. assimp's JoinIdenticalVertices is not used: its float
-// tolerance merges distinct corners of tiny coordinates, so a model saved and loaded again could
-// lose every triangle's area (a fuzz finding, tests/fuzz/findings/model_ply).
-void joinIdenticalVertices(Primitive& prim) {
-  struct Key {
-    float value[5] = {0, 0, 0, 0, 0};
-    uint32_t rgba = 0;
-    bool operator==(const Key& o) const { return std::equal(value, value + 5, o.value) && rgba == o.rgba; }
-  };
-  struct KeyHash {
-    size_t operator()(const Key& k) const {
-      uint64_t h = 1469598103934665603ull;  // FNV-1a over the normalised bits
-      for (const float v : k.value) {
-        uint32_t bits = 0;
-        const float normalised = v + 0.0f;  // -0 -> +0, so that equal values hash alike
-        std::memcpy(&bits, &normalised, sizeof bits);
-        h = (h ^ bits) * 1099511628211ull;
-      }
-      return static_cast<size_t>((h ^ k.rgba) * 1099511628211ull);
-    }
-  };
-  const size_t n = prim.positions.size() / 3;
-  for (const uint32_t i : prim.indices) {
-    if (i >= n) return;  // appendPrimitive reports the bad index
-  }
-  const bool has_uv = !prim.uvs.empty(), has_color = !prim.colors.empty();
-  std::vector<uint8_t> used(n, 0);
-  for (const uint32_t i : prim.indices) used[i] = 1;
-  std::unordered_map<Key, uint32_t, KeyHash> first;
-  first.reserve(n);
-  std::vector<uint32_t> remap(n, 0);
-  Primitive out;
-  out.material = prim.material;
-  for (size_t v = 0; v < n; ++v) {
-    if (!used[v]) continue;
-    Key key;
-    std::copy_n(&prim.positions[3 * v], 3, key.value);
-    if (has_uv) std::copy_n(&prim.uvs[2 * v], 2, key.value + 3);
-    if (has_color) std::memcpy(&key.rgba, &prim.colors[4 * v], 4);
-    const auto [it, inserted] = first.emplace(key, static_cast<uint32_t>(out.positions.size() / 3));
-    remap[v] = it->second;
-    if (!inserted) continue;
-    out.positions.insert(out.positions.end(), &prim.positions[3 * v], &prim.positions[3 * v] + 3);
-    if (has_uv) out.uvs.insert(out.uvs.end(), &prim.uvs[2 * v], &prim.uvs[2 * v] + 2);
-    if (has_color) out.colors.insert(out.colors.end(), &prim.colors[4 * v], &prim.colors[4 * v] + 4);
-  }
-  out.indices.reserve(prim.indices.size());
-  for (const uint32_t i : prim.indices) out.indices.push_back(remap[i]);
-  prim = std::move(out);
-}
 
 class SceneConverter {
  public:
@@ -900,8 +898,8 @@ Result<Model> loadWithAssimp(const std::string& path, const std::string& ext, st
     return loadPly(path, *bytes);
   }
   // No logger is created, so assimp logs to its silent default logger. Triangulate polygons,
-  // drop points and lines (duplicate vertices are merged exactly in addMesh), and flip v so that (0, 0) is the top-left
-  // of the image (assimp keeps OBJ/PLY's bottom-left origin and converts glTF's to it).
+  // drop points and lines (addMesh merges duplicate vertices exactly), and flip v so that (0, 0)
+  // is the top-left of the image (assimp keeps OBJ's bottom-left origin and converts glTF's to it).
   // ValidateDataStructure runs first and rejects out-of-range indices before the other steps.
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
