@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "support/test_support.hpp"
+#include "vkloc/core/status.hpp"
 
 namespace vkloc {
 namespace {
@@ -91,6 +92,15 @@ TEST(Text, MessagesStayOnOneLine) {
   EXPECT_EQ(text::oneLine(std::string("nul\0here", 8)), "nul\\x00here");
   EXPECT_EQ(text::shown("ok\n"), "'ok\\x0a'");
   EXPECT_EQ(text::shown(std::string(50, 'a')), "'" + std::string(40, 'a') + "...'");
+}
+
+// Every Error is built by makeError, so no message a library or a file hands through can break
+// a log line or send terminal escapes, whichever module built it.
+TEST(Text, EveryErrorMessageIsOneLine) {
+  const Error error = makeError(ErrorCode::kMalformedInput, std::string("camera.yaml:3: bad\n\0 \x1b[2J\r\n", 27));
+  EXPECT_EQ(error.code, ErrorCode::kMalformedInput);
+  EXPECT_EQ(error.message, "camera.yaml:3: bad \\x00 \\x1b[2J");
+  EXPECT_EQ(makeError(ErrorCode::kIoError, "plain message").message, "plain message");
 }
 
 TEST(Text, SplitsLinesFieldsAndCsv) {

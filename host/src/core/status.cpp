@@ -1,5 +1,7 @@
 #include "vkloc/core/status.hpp"
 
+#include "vkloc/core/text.hpp"
+
 namespace vkloc {
 
 const char* errorCodeName(ErrorCode code) {
@@ -21,5 +23,7 @@ const char* errorCodeName(ErrorCode code) {
   }
   return "unknown error";
 }
+
+Error makeError(ErrorCode code, std::string_view message) { return Error{code, text::oneLine(message)}; }
 
 }  // namespace vkloc

@@ -547,7 +547,12 @@ Status saveSequence(const Sequence& seq, const std::string& directory) {
   if (!fs::is_directory(dir, ec)) {
     return makeError(ErrorCode::kIoError, fmt::format("{}: cannot create sequence folder", directory));
   }
-  VKLOC_TRY_STATUS(writeFileAtomically(yaml_path, yaml));
+  // sequence.yaml is what makes a folder a sequence: an old one goes first and the new one is
+  // written last, so a save stopped part way (killed, disk full) leaves a folder that does not
+  // load rather than a sequence that mixes old and new files.
+  if (fs::exists(yaml_path, ec) && !fs::remove(yaml_path, ec)) {
+    return makeError(ErrorCode::kIoError, fmt::format("{}: cannot replace the old sequence file", yaml_path));
+  }
   VKLOC_TRY_STATUS(writeFileAtomically(camera_path, cameraYaml(seq.camera)));
   VKLOC_TRY_STATUS(writeFileAtomically(images_path, imageListText(seq.images)));
   // Optional files: written when there is data, removed when stale so that a reload matches.
@@ -569,7 +574,7 @@ Status saveSequence(const Sequence& seq, const std::string& directory) {
       }
     }
   }
-  return Status::success();
+  return writeFileAtomically(yaml_path, yaml);
 }
 
 }  // namespace vkloc

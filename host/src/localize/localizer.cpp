@@ -156,6 +156,15 @@ void applyBridge(const std::optional<BridgedPose>& bridged, LocalizationResult& 
   }
 }
 
+/// A frame whose pose was tracked and accepted: its image, pose (metres) and time (ns). At
+/// namespace scope: an optional of a nested type with member initialisers is not default
+/// constructible inside its enclosing class on every compiler.
+struct TrackedImage {
+  ImageU8 gray;
+  Pose T_world_camera = Pose::Identity();
+  int64_t t_ns = 0;
+};
+
 }  // namespace
 
 Result<LocalizerBackend> parseLocalizerBackend(const std::string& name) {
@@ -202,11 +211,6 @@ struct Localizer::Impl {
   int64_t frame_index = -1;          ///< Frames given to localize since create.
   bool tracked_since_reset = false;  ///< A frame was tracked since create/reset.
   /// The last frame whose pose was tracked and accepted: its image, pose and time.
-  struct TrackedImage {
-    ImageU8 gray;
-    Pose T_world_camera = Pose::Identity();
-    int64_t t_ns = 0;
-  };
   std::optional<TrackedImage> last_tracked_gray;
   /// Consecutive confidently verified poses the motion prior refused, the last one's time and pose.
   struct Refusals {

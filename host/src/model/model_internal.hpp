@@ -1,5 +1,5 @@
-// Private helpers shared by the model loaders (model_io.cpp, assimp_loader.cpp, gltf_loader.cpp,
-// draco_loader.cpp, cao.cpp) and the block builder (blocks.cpp).
+// Private helpers shared by the model loaders (model_io.cpp, assimp_loader.cpp, ply_loader.cpp,
+// gltf_loader.cpp, draco_loader.cpp, cao.cpp) and the block builder (blocks.cpp).
 #pragma once
 
 #include <algorithm>
@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "vkloc/model/model.hpp"
@@ -49,6 +50,32 @@ bool hasTriangleWithArea(const std::vector<float>& positions, const std::vector<
 /// `text` with line breaks and other control characters replaced by spaces.
 std::string oneLine(std::string text);
 
+/// White space inside a line of a text model format (not the line break).
+inline bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+/// `text` for quoting in a message: bytes outside printable ASCII become '?', at most
+/// `max_size` kept ("..." marks a cut).
+std::string quote(std::string_view text, size_t max_size = 60);
+
+/// Calls fn(line_number, line) for every line of `text` (1-based numbers, no '\n'); stops and
+/// returns false when fn does.
+template <typename Fn>
+bool forEachLine(std::string_view text, Fn&& fn) {
+  size_t line_number = 0, pos = 0;
+  while (pos < text.size()) {
+    size_t end = text.find('\n', pos);
+    if (end == std::string_view::npos) end = text.size();
+    if (!fn(++line_number, text.substr(pos, end - pos))) return false;
+    pos = end + 1;
+  }
+  return true;
+}
+
+/// Merges the vertices of `prim` whose position, uv and colour are equal (0 and -0 alike) and
+/// drops the ones no triangle uses; leaves `prim` as it is when an index is out of range
+/// (appendPrimitive reports it).
+void joinIdenticalVertices(Primitive& prim);
+
 /// Lower-case extension of `path` including the dot (".obj"), or "" when there is none.
 std::string lowerExtension(const std::string& path);
 
@@ -82,6 +109,8 @@ inline uint8_t toByte(float v) {
 Result<Model> loadWithAssimp(const std::string& path, const std::string& ext, std::vector<std::string>& warnings);
 bool assimpReadsExtension(const std::string& ext);
 Result<Model> loadDrc(const std::string& path);
+/// PLY, ASCII or binary, read by vkloc itself (ply_loader.cpp).
+Result<Model> loadPly(const std::string& path, const std::vector<uint8_t>& bytes);
 Result<Model> loadGltf(const std::string& path, std::vector<std::string>& warnings);
 
 /// Decodes a Draco mesh after checking the stream's counts against its size. nullptr with

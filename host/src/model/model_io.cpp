@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <unordered_map>
 
 #include "model/model_internal.hpp"
 #include "vkloc/core/text.hpp"
@@ -223,6 +224,66 @@ bool decodeTexture(const uint8_t* data, size_t size, Texture& out, std::string& 
     return false;
   }
   return true;
+}
+
+std::string quote(std::string_view text, size_t max_size) {
+  std::string out(text.substr(0, max_size));
+  for (char& c : out) {
+    if (c < 0x20 || c > 0x7e) c = '?';
+  }
+  return text.size() > max_size ? out + "..." : out;
+}
+
+// Merges the vertices of `prim` whose position, uv and colour are equal (0 and -0 alike) and
+// drops the ones no triangle uses. assimp's JoinIdenticalVertices is not used: its float
+// tolerance merges distinct corners of tiny coordinates, so a model saved and loaded again could
+// lose every triangle's area (a fuzz finding, tests/fuzz/findings/model_ply).
+void joinIdenticalVertices(Primitive& prim) {
+  struct Key {
+    float value[5] = {0, 0, 0, 0, 0};
+    uint32_t rgba = 0;
+    bool operator==(const Key& o) const { return std::equal(value, value + 5, o.value) && rgba == o.rgba; }
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      uint64_t h = 1469598103934665603ull;  // FNV-1a over the normalised bits
+      for (const float v : k.value) {
+        uint32_t bits = 0;
+        const float normalised = v + 0.0f;  // -0 -> +0, so that equal values hash alike
+        std::memcpy(&bits, &normalised, sizeof bits);
+        h = (h ^ bits) * 1099511628211ull;
+      }
+      return static_cast<size_t>((h ^ k.rgba) * 1099511628211ull);
+    }
+  };
+  const size_t n = prim.positions.size() / 3;
+  for (const uint32_t i : prim.indices) {
+    if (i >= n) return;  // appendPrimitive reports the bad index
+  }
+  const bool has_uv = !prim.uvs.empty(), has_color = !prim.colors.empty();
+  std::vector<uint8_t> used(n, 0);
+  for (const uint32_t i : prim.indices) used[i] = 1;
+  std::unordered_map<Key, uint32_t, KeyHash> first;
+  first.reserve(n);
+  std::vector<uint32_t> remap(n, 0);
+  Primitive out;
+  out.material = prim.material;
+  for (size_t v = 0; v < n; ++v) {
+    if (!used[v]) continue;
+    Key key;
+    std::copy_n(&prim.positions[3 * v], 3, key.value);
+    if (has_uv) std::copy_n(&prim.uvs[2 * v], 2, key.value + 3);
+    if (has_color) std::memcpy(&key.rgba, &prim.colors[4 * v], 4);
+    const auto [it, inserted] = first.emplace(key, static_cast<uint32_t>(out.positions.size() / 3));
+    remap[v] = it->second;
+    if (!inserted) continue;
+    out.positions.insert(out.positions.end(), &prim.positions[3 * v], &prim.positions[3 * v] + 3);
+    if (has_uv) out.uvs.insert(out.uvs.end(), &prim.uvs[2 * v], &prim.uvs[2 * v] + 2);
+    if (has_color) out.colors.insert(out.colors.end(), &prim.colors[4 * v], &prim.colors[4 * v] + 4);
+  }
+  out.indices.reserve(prim.indices.size());
+  for (const uint32_t i : prim.indices) out.indices.push_back(remap[i]);
+  prim = std::move(out);
 }
 
 bool hasTriangleWithArea(const std::vector<float>& positions, const std::vector<uint32_t>& indices) {
@@ -441,7 +502,12 @@ Result<Model> loadChecked(const std::string& path, const ModelLoadOptions& optio
 
   const std::string ext = model_detail::lowerExtension(path);
   Result<Model> loaded = [&]() -> Result<Model> {
-    if (ext == ".obj" || ext == ".ply") return model_detail::loadWithAssimp(path, ext, warnings);
+    if (ext == ".obj") return model_detail::loadWithAssimp(path, ext, warnings);
+    if (ext == ".ply") {
+      auto bytes = model_detail::readFileBytes(path);
+      if (!bytes.ok()) return bytes.error();
+      return model_detail::loadPly(path, *bytes);
+    }
     if (ext == ".gltf" || ext == ".glb") return model_detail::loadGltf(path, warnings);
     if (ext == ".drc") return model_detail::loadDrc(path);
     if (ext == ".cao") return loadCaoModel(path, &warnings);

@@ -4,6 +4,7 @@
 #include <cassert>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <variant>
 
@@ -90,8 +91,11 @@ class [[nodiscard]] Status {
 /// warnings to a handler the caller gives (null handlers drop them) or returns them.
 using WarningHandler = std::function<void(const std::string& message)>;
 
-/// Builds an Error; message is one line naming the thing at fault and the fix.
-inline Error makeError(ErrorCode code, std::string message) { return Error{code, std::move(message)}; }
+/// Builds an Error; message is one line naming the thing at fault and the fix. Whatever the
+/// message holds (a file's bytes, a library's text), the Error's message is one line: line
+/// breaks and runs of white space become one space, other control characters are escaped
+/// (`\x00`), leading and trailing space is dropped.
+Error makeError(ErrorCode code, std::string_view message);
 
 }  // namespace vkloc
 

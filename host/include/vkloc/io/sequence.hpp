@@ -67,7 +67,9 @@ Result<Sequence> loadSequence(const std::string& directory);
 /// Writes sequence.yaml, camera.yaml, images.txt and, when non-empty, groundtruth.txt, imu.csv
 /// and prior.csv into `directory` (created if needed). Each file is written atomically
 /// (temporary + rename); an optional file left from an earlier save is removed when its data is
-/// now empty, so that loading gives back `sequence`. Image files are the caller's.
+/// now empty, so that loading gives back `sequence`. sequence.yaml is removed first and written
+/// last: a save that stops part way leaves a folder that does not load, never a mix of old and
+/// new files. Image files are the caller's.
 /// kInvalidArgument (before anything is written) for non-finite values, invalid poses or camera,
 /// sigma <= 0, image paths with line breaks or surrounding spaces, or timestamps that do not
 /// increase.
