@@ -98,7 +98,9 @@ void run(const BenchArgs& a) {
     // "drone": the demo's first drone view (45 deg down); "overview": far away, whole model in view.
     const Pose overview = take(lookAt({-180, -180, 220}, {0, 0, 0}));
     const std::pair<const char*, Pose> cases[2] = {{"drone", views.front()}, {"overview", overview}};
-    for (const auto& [view_name, pose] : cases) {
+    for (const auto& view_case : cases) {
+      const char* const view_name = view_case.first;
+      const Pose& pose = view_case.second;  // a plain reference: lambdas below capture it
       RenderSettings all;
       all.cull_back_faces = a.cull;
       RenderSettings no_normals = all;
