@@ -88,7 +88,7 @@ struct LocalizerArgs {
   std::string backend = "auto";
   std::string policy = "when-needed";
   std::string keyframes = "worker";
-  std::string filter = "window";  ///< Inertial fusion: ekf | window.
+  std::string filter = "ekf";  ///< Inertial fusion: ekf | window.
   int max_search_level = LocalizerOptions{}.max_search_level;
   double visual_covariance_scale = InertialAiding{}.ekf.measurement_covariance_scale;
   void add(CLI::App& app);

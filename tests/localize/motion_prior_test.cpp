@@ -227,6 +227,8 @@ TEST(EkfPrior, PredictsFromTheFirstFrameGatesBridgesAndOutputsAtTheImuRate) {
     if (velocity_given) {
       EXPECT_LT(err1, 0.01);
     }
+    // Until a second pose, an unknown start velocity is flagged (the gate cannot judge a pose).
+    EXPECT_EQ(p->velocity_unobserved, !velocity_given);
     EXPECT_TRUE(prior.consistent(*p, truth1, visual, 10.0)) << prior.lastInnovation();
     EXPECT_TRUE(std::isfinite(prior.lastInnovation()));
     prior.addVisualPose(t, truth1, visual);
@@ -240,12 +242,22 @@ TEST(EkfPrior, PredictsFromTheFirstFrameGatesBridgesAndOutputsAtTheImuRate) {
     feed(t);
     p = prior.predict(t);
     ASSERT_TRUE(p.has_value());
+    EXPECT_FALSE(p->velocity_unobserved);
     const Pose truth = f.trajectory.evaluate(t).T_world_body;
     EXPECT_LT((p->T_world_camera.translation() - truth.translation()).norm(), 0.005);
     Pose off = truth;
     off.translation().x() += 1.0;
     EXPECT_FALSE(prior.consistent(*p, off, visual, 10.0));
     EXPECT_GT(prior.lastInnovation(), prior.filter().gateThreshold());
+    // A pose the chi-square test refuses (a covariance of 0.1 mm) is still taken within the gate's
+    // floor of the prediction (gate_depth_ratio x depth: 5 cm at 10 m), and refused beyond it.
+    const Matrix6d tight = Matrix6d::Identity() * 1e-8;
+    Pose near = p->T_world_camera;
+    near.translation().x() += 0.04;
+    EXPECT_TRUE(prior.consistent(*p, near, tight, 10.0));
+    EXPECT_GT(prior.lastInnovation(), prior.filter().gateThreshold());
+    near.translation().x() += 0.02;
+    EXPECT_FALSE(prior.consistent(*p, near, tight, 10.0));
     const auto bridged = prior.bridge(t, p, truth);
     ASSERT_TRUE(bridged.has_value());
     EXPECT_TRUE(bridged->T_world_camera.isApprox(p->T_world_camera));

@@ -371,12 +371,20 @@ struct Localizer::Impl {
     // Many starts give many chances to converge somewhere wrong: a result must be tracked, pass
     // the prior's gate and the pose verification; the best verified one is kept, and the search
     // stops early at one verified with motion_search_confident_score.
+    // A filter started at an unknown velocity has a gate that admits whatever its velocity's sigma
+    // reaches, and the first pose after the start sets that velocity for the frames to come (a
+    // start that converged only part of the way, on a near wall beside a far facade, would carry
+    // its error on): until a second pose has pinned the velocity down, a searched pose must be
+    // verified with motion_search_confident_score.
+    const double min_score = prediction.velocity_unobserved
+                                 ? std::max(verification.min_score, options.motion_search_confident_score)
+                                 : verification.min_score;
     std::optional<TrackResult> best;
     double best_score = 0;
     auto consider = [&](TrackResult r) {
       if (r.state != TrackingState::kTracking || refused(r)) return false;
       const double score = verificationScore(verificationFeatures(r, keyframe.scene_depth_m), verification);
-      if (score < verification.min_score || (best && score <= best_score)) return false;
+      if (score < min_score || (best && score <= best_score)) return false;
       best = std::move(r);
       best_score = score;
       return score >= options.motion_search_confident_score;

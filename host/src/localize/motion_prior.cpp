@@ -203,6 +203,7 @@ std::optional<MotionPrediction> EkfPrior::predict(int64_t t_ns) const {
       out.covariance = p->covariance_camera;
       // Largest position sigma (the translation block is in the camera frame: its trace bounds it).
       out.sigma_m = std::sqrt(std::max(0.0, p->covariance_camera.topLeftCorner<3, 3>().trace()));
+      out.velocity_unobserved = velocity_unobserved_;
       return out;
     }
   }
@@ -210,7 +211,7 @@ std::optional<MotionPrediction> EkfPrior::predict(int64_t t_ns) const {
 }
 
 bool EkfPrior::consistent(const MotionPrediction& prediction, const Pose& T_world_camera, const Matrix6d& covariance,
-                          double) const {
+                          double scene_depth_m) const {
   last_innovation_ = std::numeric_limits<double>::quiet_NaN();
   if (!prediction.inertial || !ekf_.initialized() || ekf_.awaitingFix()) return true;
   // The filter's own test: the same residual, Jacobian, scale, floors and threshold as the
@@ -220,7 +221,16 @@ bool EkfPrior::consistent(const MotionPrediction& prediction, const Pose& T_worl
   Result<EkfUpdate> u = ekf_.testCameraPose(t_test, T_world_camera, covariance);
   if (!u.ok()) return true;  // cannot be tested (e.g. no reading yet at the frame's time)
   last_innovation_ = u->mahalanobis_sq;
-  return u->accepted;
+  if (u->accepted) return true;
+  // The chi-square test trusts the filter's covariance, which shrinks with every update although
+  // the alignment's errors on real imagery (model-to-image differences) stay alike from frame to
+  // frame: a filter that has drifted by a few of its sigmas would then refuse every correct pose
+  // and drift further. A pose within the window gate's floor of the prediction (a fraction of the
+  // scene depth, and gate_rotation_deg) is no evidence of a wrong alignment and is taken.
+  const Pose d = prediction.T_world_camera.inverse() * T_world_camera;
+  const double depth = scene_depth_m > 0 ? scene_depth_m : 1.0;
+  return d.translation().norm() <= aiding_.gate_depth_ratio * depth &&
+         rotationAngleDeg(d.linear()) <= aiding_.gate_rotation_deg;
 }
 
 void EkfPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) {
@@ -245,8 +255,10 @@ void EkfPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Mat
     if (!ekf_.initializeFromCamera(t_ns, T_world_camera, v_body, P0).ok()) return;
     // The start pose is itself a measurement (its covariance tightens the initial sigmas).
     (void)ekf_.updateCameraPose(t_ns, T_world_camera, covariance, EkfGate::kForceAccept);
+    velocity_unobserved_ = !start_velocity_;
     return;
   }
+  velocity_unobserved_ = false;
   // The pose passed consistent()'s gate (or could not be tested): applied as is. A pose older
   // than the newest reading is a delayed update; one newer than the readings cannot be applied.
   const int64_t t_update = std::min(t_ns, ekf_.newestNs());
@@ -270,6 +282,7 @@ void EkfPrior::reset(const std::optional<Pose>& T_world_camera, const std::optio
   scene_depth_m_ = 0;
   ekf_.reset();
   has_imu_ = false;
+  velocity_unobserved_ = false;
   motion_.reset(T_world_camera, v_world_camera);
   last_update_t_ns_ = 0;
   last_innovation_ = std::numeric_limits<double>::quiet_NaN();

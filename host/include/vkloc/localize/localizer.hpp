@@ -168,7 +168,9 @@ struct LocalizerOptions {
   /// apart, out to search_sigmas sigma but at most motion_search_steps steps each way), probed
   /// with a few Gauss-Newton steps on that level alone, aligned fully from the
   /// motion_search_candidates probes with the most inliers. Of the results tracked, passing the
-  /// gate and verified (verification.min_score) the best score is kept. 0 steps = off.
+  /// gate and verified (verification.min_score; motion_search_confident_score while the prior's
+  /// velocity is unobserved, MotionPrediction::velocity_unobserved) the best score is kept.
+  /// 0 steps = off.
   int motion_search_steps = 6;
   int motion_search_candidates = 3;
   /// Before the grid, the motion search aligns from the start the image shift since the last

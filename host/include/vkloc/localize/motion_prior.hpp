@@ -52,13 +52,14 @@ struct InertialAiding {
       InertialFilter::kEkf;  ///< Fusion; kEkf uses `ekf` (its gravity and T_body_camera are set from these).
   /// kEkf: noise densities, initial sigmas, gate, buffer. An unknown start velocity is taken as
   /// 0 with a 1-sigma of 15 m/s (a drone in flight) until the scene depth scales it
-  /// (unknown_velocity_depths_per_s). The alignment's Gauss-Newton covariance is taken 10 times
-  /// larger (measurement_covariance_scale): it counts only the pixel noise of the edge residuals,
-  /// not the model-to-image differences that dominate on real imagery (README, "Filter").
+  /// (unknown_velocity_depths_per_s). The alignment's Gauss-Newton covariance is taken 100 times
+  /// larger (measurement_covariance_scale, 10 x the standard deviation): it counts only the pixel
+  /// noise of the edge residuals, taken as independent, not the model-to-image differences that
+  /// dominate on real imagery and stay alike from frame to frame (README, "Filter").
   EkfOptions ekf = [] {
     EkfOptions o;
     o.initial_sigma_velocity_m_s = 15.0;
-    o.measurement_covariance_scale = 10.0;
+    o.measurement_covariance_scale = 100.0;
     return o;
   }();
   Pose T_body_camera = Pose::Identity();       ///< Camera frame into the body (IMU) frame, metres.
@@ -83,6 +84,9 @@ struct MotionPrediction {
   /// Covariance of xi = [rho; phi] in the camera frame (T_true = T_world_camera expSE3(xi)), m^2
   /// and rad^2; zero when the prior has none (only kEkf fills it).
   Matrix6d covariance = Matrix6d::Zero();
+  /// kEkf: the filter started at an unknown velocity that no second pose has pinned down yet, so
+  /// its gate cannot tell a wrong pose from a right one (the velocity's sigma admits both).
+  bool velocity_unobserved = false;
 };
 
 /// The filter's state at one IMU reading (kEkf), for output at the IMU rate.
@@ -252,6 +256,10 @@ class EkfPrior final : public MotionPrior {
   std::optional<MotionPrediction> predict(int64_t t_ns) const override;
   /// Chi-square gate of the filter (EkfOptions::gate_probability) on the pose with the frame's
   /// alignment covariance: the pose is tested as the filter's update would be (lastInnovation()).
+  /// A pose the chi-square test refuses is still taken when it lies within the window gate's
+  /// floor of the prediction: gate_depth_ratio x scene_depth_m (1 m when unknown) and
+  /// gate_rotation_deg; the filter's covariance alone would let a drifted filter refuse correct
+  /// poses frame after frame.
   bool consistent(const MotionPrediction& prediction, const Pose& T_world_camera, const Matrix6d& covariance,
                   double scene_depth_m) const override;
   /// Starts the filter at the first pose, else updates it with the pose (gate already passed).
@@ -280,6 +288,7 @@ class EkfPrior final : public MotionPrior {
   std::optional<Eigen::Vector3d> start_velocity_;
   double scene_depth_m_ = 0;
   bool has_imu_ = false;  ///< The filter took a reading since reset (without, the constant-velocity prior runs).
+  bool velocity_unobserved_ = false;  ///< Started at an unknown velocity, no update since.
   int64_t last_update_t_ns_ = 0;
   mutable double last_innovation_ = std::numeric_limits<double>::quiet_NaN();
 };
