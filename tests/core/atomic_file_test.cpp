@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include <thread>
 
 #include "support/test_support.hpp"
+#include "vkloc/core/text.hpp"
 
 namespace vkloc {
 namespace {
@@ -35,6 +37,26 @@ TEST(AtomicFile, ReplacesARegularFileAndLeavesNoTemporary) {
   ASSERT_TRUE(writeFileAtomically(path, "second").ok());
   EXPECT_EQ(readAll(path), "second");
   EXPECT_EQ(entries(dir.path()), 1u);
+}
+
+// A writer killed between writing and renaming leaves "<name>.tmp-<pid>-<n>": the next process
+// to write into that folder removes it when that process no longer runs, and leaves a live
+// process's temporaries and other files alone.
+TEST(AtomicFile, TemporariesOfWritersThatNoLongerRunAreRemoved) {
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) ::_exit(0);
+  ASSERT_EQ(::waitpid(child, nullptr, 0), child);  // `child` is now a process id nobody runs
+  test::TempDir dir;
+  const std::string dead = dir.file(text::cat("a.txt.tmp-", static_cast<long>(child), "-3"));
+  const std::string live = dir.file(text::cat("b.txt.tmp-", static_cast<long>(::getppid()), "-0"));
+  const std::string other = dir.file(text::cat("c.tmp-", static_cast<long>(child), "-x"));
+  for (const std::string& f : {dead, live, other}) std::ofstream(f) << "half";
+  ASSERT_TRUE(writeFileAtomically(dir.file("a.txt"), "whole").ok());
+  EXPECT_FALSE(fs::exists(dead));
+  EXPECT_TRUE(fs::exists(live));
+  EXPECT_TRUE(fs::exists(other));
+  EXPECT_EQ(readAll(dir.file("a.txt")), "whole");
 }
 
 TEST(AtomicFile, FollowsASymbolicLinkAndKeepsIt) {

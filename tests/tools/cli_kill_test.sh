@@ -4,7 +4,8 @@
 # progress; `vkloc track` renames it when the run is complete). Each command runs once to the end
 # to time it, then is killed with SIGKILL at several points spread over that time.
 # Temporaries of an atomic write ("<name>.tmp-<pid>-<n>") that a kill interrupts are allowed and
-# counted: they never replace the output they were for.
+# counted: they never replace the output they were for; the same command run again into that
+# folder removes them (their process no longer runs) and completes every output.
 # Usage: cli_kill_test.sh <vkloc> <work dir>
 set -euo pipefail
 VKLOC=$1
@@ -84,6 +85,24 @@ check_outputs() {
   fi
 }
 
+# Temporaries of atomic writes under a folder.
+count_temporaries() {
+  find "$1" -type f -name '*.tmp-[0-9]*-[0-9]*' 2>/dev/null | wc -l
+}
+
+# The command "${@:2}" run again to the end into the killed folder $1: no temporary stays.
+rerun_clears() {
+  local dir=$1
+  shift
+  [ "$(count_temporaries "$dir")" -gt 0 ] || return 0
+  "$@" >/dev/null 2>&1 || { fail "$* failed after a kill"; return; }
+  local left
+  left=$(count_temporaries "$dir")
+  [ "$left" -eq 0 ] || fail "$dir: ${left} temporaries of a killed run left after running again"
+  reruns=$((reruns + 1))
+}
+reruns=0
+
 # Runs "$@" to the end; prints its wall time in milliseconds.
 timed() {
   local t0 t1
@@ -125,6 +144,8 @@ for at in $(kill_points "$ms"); do
   out=$WORK/sim_killed_$at
   kill_after "$at" "${sim[@]}" --out "$out"
   check_outputs "$out"
+  rerun_clears "$out" "${sim[@]}" --out "$out"
+  check_outputs "$out"
 done
 
 # --- track --------------------------------------------------------------------------------
@@ -138,6 +159,8 @@ echo "track: ${ms} ms to the end"
 for at in $(kill_points "$ms"); do
   out=$WORK/track_killed_$at
   kill_after "$at" "${track[@]}" --out "$out/traj.txt" --overlay "$out/overlay"
+  check_outputs "$out" "$seq"
+  rerun_clears "$out" "${track[@]}" --out "$out/traj.txt" --overlay "$out/overlay"
   check_outputs "$out" "$seq"
 done
 
@@ -155,7 +178,7 @@ for at in $(kill_points "$ms"); do
   check_outputs "$out"
 done
 
-echo "checked ${checked} files after $(($(echo $FRACTIONS | wc -w) * 3)) kills; ${temporaries} atomic-write temporaries left"
+echo "checked ${checked} files after $(($(echo $FRACTIONS | wc -w) * 3)) kills; ${temporaries} atomic-write temporaries met, ${reruns} folders with temporaries run again and cleared"
 if [ "$failures" -gt 0 ]; then
   echo "${failures} failure(s)" >&2
   exit 1

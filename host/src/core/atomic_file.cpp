@@ -1,12 +1,16 @@
 #include "vkloc/core/atomic_file.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
+#include <charconv>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
+#include <set>
 
 #include "vkloc/core/text.hpp"
 
@@ -43,8 +47,49 @@ Result<Target> resolveTarget(const std::string& path) {
   return Target{path, false};
 }
 
+/// The writer's process id of a temporary name "<name>.tmp-<pid>-<n>", or -1 for another name.
+long temporaryOwner(const std::string& name) {
+  const size_t at = name.rfind(".tmp-");
+  if (at == std::string::npos || at == 0) return -1;
+  const char* p = name.data() + at + 5;
+  const char* end = name.data() + name.size();
+  long pid = 0;
+  uint64_t n = 0;
+  auto [after_pid, e1] = std::from_chars(p, end, pid);
+  if (e1 != std::errc() || after_pid == p || after_pid == end || *after_pid != '-' || pid <= 0) return -1;
+  auto [after_n, e2] = std::from_chars(after_pid + 1, end, n);
+  if (e2 != std::errc() || after_n == after_pid + 1 || after_n != end) return -1;
+  return pid;
+}
+
+/// Removes the temporaries in `folder` whose writer no longer runs (a kill -9 or a power cut
+/// between writing and renaming): kill(pid, 0) says ESRCH. A live process's, or one that cannot
+/// be asked (EPERM: another user's), is left alone. Once per folder and process: a folder written
+/// into many times (a sequence's images) is listed once.
+void sweepStaleTemporaries(const std::string& file) {
+  static std::mutex mutex;
+  static std::set<std::string> swept;
+  std::error_code ec;
+  const fs::path folder = fs::absolute(fs::path(file), ec).parent_path();
+  if (ec) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (swept.size() >= 4096) swept.clear();  // bounded for a process that writes into many folders
+    if (!swept.insert(folder.string()).second) return;
+  }
+  const long self = static_cast<long>(::getpid());
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const long pid = temporaryOwner(it->path().filename().string());
+    if (pid <= 0 || pid == self) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;
+    std::error_code ignored;
+    if (it->is_regular_file(ignored)) fs::remove(it->path(), ignored);
+  }
+}
+
 std::string temporaryName(const std::string& file) {
   static std::atomic<uint64_t> counter{0};
+  sweepStaleTemporaries(file);
   return cat(file, ".tmp-", static_cast<long>(::getpid()), "-", counter.fetch_add(1));
 }
 

@@ -2,12 +2,14 @@
 //
 // Regular files are written under a temporary name in the same folder ("<name>.tmp-<pid>-<n>")
 // and renamed over the target when complete, so a reader (or a crash, or kill -9) sees the old
-// file or the new one, never a mixture. A target that exists and is not a regular file (a
-// device such as /dev/null or /dev/full, a pipe, /dev/stdout) is written directly: replacing it
-// with a regular file would be wrong, and errors on it (ENOSPC on /dev/full) are reported. A
-// symbolic link to a regular file is followed: the file it points to is replaced, the link stays.
-// Errors are kIoError with one line naming the file and the system's reason. Standard library
-// and POSIX only. Functions are safe to call from several threads on different paths.
+// file or the new one, never a mixture. The temporaries a killed writer left (its process no
+// longer runs) are removed from a folder the first time a process writes into it. A target that
+// exists and is not a regular file (a device such as /dev/null or /dev/full, a pipe, /dev/stdout)
+// is written directly: replacing it with a regular file would be wrong, and errors on it (ENOSPC
+// on /dev/full) are reported. A symbolic link to a regular file is followed: the file it points
+// to is replaced, the link stays. Errors are kIoError with one line naming the file and the
+// system's reason. Standard library and POSIX only. Functions are safe to call from several
+// threads on different paths.
 #pragma once
 
 #include <cstdio>
