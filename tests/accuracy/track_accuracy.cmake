@@ -1,10 +1,14 @@
-# One accuracy case of `vkloc track`. Arguments: -DVKLOC=path -DWORK=dir -DCASE=name [-DFRAMES=n].
+# One accuracy case of `vkloc track`. Arguments: -DVKLOC=path -DWORK=dir -DCASE=name [-DFRAMES=n]
+# [-DFILTER=window|ekf] (the simulated cases' inertial fusion; window unless given).
 #   castle         ViSP Castle-simu from the GT first pose: mean error <= 2 mm and <= 0.2 deg, none lost
 #   castle_offset  same from a first pose 2 cm / 5 deg off: converges (none lost, mean <= 2 mm, 0.2 deg)
 # Each case runs with keyframes on the worker thread (the default) and made synchronously.
 #   city_hard, room_hard  simulated: per policy (every-frame, when-needed) no frame lost (at most a
 #                  quarter bridged by the IMU alone; 30 % with the worker, see below), median
-#                  translation error <= 0.5 % of the median scene depth, median rotation <= 0.3 deg
+#                  translation error <= 0.5 % of the median scene depth, median rotation <= 0.3 deg.
+#                  These limits were set with the window fit; with the EKF (`vkloc track`'s default)
+#                  room hard with the keyframe worker bridges 0-37 frames from run to run (the
+#                  worker's timing decides when its gate has drifted off; tests *_hard_ekf, open).
 # Skipped when the ViSP data is not installed (a "-- skipped: " line, ctest SKIP_REGULAR_EXPRESSION:
 # Debian 12 has CMake 3.25, without cmake_language(EXIT)).
 cmake_minimum_required(VERSION 3.22)
@@ -107,12 +111,19 @@ else()
   if(NOT FRAMES)
     set(FRAMES 100)
   endif()
-  set(seq ${WORK}/${CASE}_sequence)
+  if(NOT FILTER)
+    set(FILTER window)
+  endif()
+  set(label ${CASE})
+  if(NOT FILTER STREQUAL "window")
+    set(label ${CASE}_${FILTER})
+  endif()
+  set(seq ${WORK}/${label}_sequence)
   file(REMOVE_RECURSE ${seq})
   run("simulate ${CASE}" ${VKLOC} simulate ${scene} ${difficulty} --frames ${FRAMES} --out ${seq})
   foreach(policy every-frame when-needed)
     foreach(mode worker sync)
-      track_and_check(${CASE} ${seq} ${policy} ${mode} "")
+      track_and_check(${label} ${seq} ${policy} ${mode} "--filter;${FILTER}")
     endforeach()
   endforeach()
 endif()

@@ -381,12 +381,15 @@ struct Localizer::Impl {
                                  : verification.min_score;
     std::optional<TrackResult> best;
     double best_score = 0;
+    std::shared_ptr<const Keyframe> best_keyframe;  // the keyframe `best` was aligned against
     auto consider = [&](TrackResult r) {
       if (r.state != TrackingState::kTracking || refused(r)) return false;
-      const double score = verificationScore(verificationFeatures(r, keyframe.scene_depth_m), verification);
+      const double score =
+          verificationScore(verificationFeatures(r, keyframes->current()->scene_depth_m), verification);
       if (score < min_score || (best && score <= best_score)) return false;
       best = std::move(r);
       best_score = score;
+      best_keyframe = keyframes->current();
       return score >= options.motion_search_confident_score;
     };
     // First the starts the image motion since the last tracked frame points at: the gyro turns
@@ -435,6 +438,7 @@ struct Localizer::Impl {
     struct Candidate {
       Pose start;
       double inliers;
+      double residual_px;  ///< Mean inlier residual (ties of inliers: the deepest level has few points).
     };
     std::vector<Candidate> candidates;
     const auto t0 = SteadyClock::now();
@@ -446,19 +450,47 @@ struct Localizer::Impl {
         Result<TrackResult> r = active->align(keyframe.reference, start, probe);
         if (!r.ok()) return r.error();
         ++out.motion_search_probes;
-        candidates.push_back({r->T_world_camera, r->quality.inlier_ratio * r->quality.points_in_image});
+        candidates.push_back(
+            {r->T_world_camera, r->quality.inlier_ratio * r->quality.points_in_image, r->quality.mean_residual_px});
       }
     }
     out.align_ms += msSince(t0);
-    const size_t keep = std::min(candidates.size(), static_cast<size_t>(std::max(1, options.motion_search_candidates)));
-    std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(keep), candidates.end(),
-                      [](const Candidate& a, const Candidate& b) { return a.inliers > b.inliers; });
-    for (size_t k = 0; k < keep; ++k) {
-      Result<TrackResult> r = alignFrom(candidates[k].start);
+    // The best probes by inliers (ties, common on the deepest level's few points, by the lower
+    // mean residual); probes that converged to the same pose (within half a grid step and a
+    // degree) are one candidate: aligning it again would only repeat the same result.
+    std::stable_sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+      return a.inliers != b.inliers ? a.inliers > b.inliers : a.residual_px < b.residual_px;
+    });
+    const size_t wanted = static_cast<size_t>(std::max(1, options.motion_search_candidates));
+    std::vector<const Candidate*> distinct;
+    for (const Candidate& c : candidates) {
+      if (distinct.size() == wanted) break;
+      const bool repeated = std::any_of(distinct.begin(), distinct.end(), [&](const Candidate* d) {
+        const Pose delta = d->start.inverse() * c.start;
+        return delta.translation().norm() < 0.5 * grid.step_m && rotationAngleDeg(delta.linear()) < 1.0;
+      });
+      if (!repeated) distinct.push_back(&c);
+    }
+    // Each is aligned against a keyframe rendered at it: the keyframe of the guess, a grid step or
+    // more away, shows near surfaces with another parallax and other occlusion edges, and a full
+    // alignment against it slides off a start the probe had brought within a few centimetres
+    // (cycles-room start 50: three starts 2-5 cm from the truth all ended 19 cm off, lost).
+    for (const Candidate* c : distinct) {
+      VKLOC_TRY_STATUS(makeKeyframe(c->start, out.t_ns, out));
+      Result<TrackResult> r = alignFrom(c->start);
       if (!r.ok()) return r.error();
       if (consider(std::move(r).value())) break;
     }
-    return best ? std::move(*best) : std::move(lost);
+    // The keyframe the result was aligned against is the current one again (nothing found: the
+    // guess's), for the frames that follow from there.
+    if (best) {
+      if (keyframes->current() != best_keyframe) {
+        VKLOC_TRY_STATUS(makeKeyframe(best_keyframe->request.T_world_ref, out.t_ns, out));
+      }
+      return std::move(*best);
+    }
+    if (!distinct.empty()) VKLOC_TRY_STATUS(makeKeyframe(guess, out.t_ns, out));
+    return lost;
   }
 
   /// Relocalization search (RelocalizationOptions) of this frame in `region` (nullopt: the whole

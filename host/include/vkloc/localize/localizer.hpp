@@ -166,8 +166,9 @@ struct LocalizerOptions {
   /// other starts: first those the image shifts since the last tracked frame point at (see
   /// below), then a grid of start translations across the view (spaced 1.5 basins of that level
   /// apart, out to search_sigmas sigma but at most motion_search_steps steps each way), probed
-  /// with a few Gauss-Newton steps on that level alone, aligned fully from the
-  /// motion_search_candidates probes with the most inliers. Of the results tracked, passing the
+  /// with a few Gauss-Newton steps on that level alone, and aligned fully, each against a
+  /// keyframe rendered at it, from the motion_search_candidates probes with the most inliers
+  /// (ties: the lower mean residual) that ended at distinct poses. Of the results tracked, passing the
   /// gate and verified (verification.min_score; motion_search_confident_score while the prior's
   /// velocity is unobserved, MotionPrediction::velocity_unobserved) the best score is kept.
   /// 0 steps = off.

@@ -52,14 +52,14 @@ struct InertialAiding {
       InertialFilter::kEkf;  ///< Fusion; kEkf uses `ekf` (its gravity and T_body_camera are set from these).
   /// kEkf: noise densities, initial sigmas, gate, buffer. An unknown start velocity is taken as
   /// 0 with a 1-sigma of 15 m/s (a drone in flight) until the scene depth scales it
-  /// (unknown_velocity_depths_per_s). The alignment's Gauss-Newton covariance is taken 100 times
-  /// larger (measurement_covariance_scale, 10 x the standard deviation): it counts only the pixel
-  /// noise of the edge residuals, taken as independent, not the model-to-image differences that
-  /// dominate on real imagery and stay alike from frame to frame (README, "Filter").
+  /// (unknown_velocity_depths_per_s). The alignment's Gauss-Newton covariance is taken 10 times
+  /// larger (measurement_covariance_scale): it counts only the pixel noise of the edge residuals,
+  /// taken as independent, not the model-to-image differences that dominate on real imagery
+  /// (README, "Filter", for what larger factors do).
   EkfOptions ekf = [] {
     EkfOptions o;
     o.initial_sigma_velocity_m_s = 15.0;
-    o.measurement_covariance_scale = 100.0;
+    o.measurement_covariance_scale = 10.0;
     return o;
   }();
   Pose T_body_camera = Pose::Identity();       ///< Camera frame into the body (IMU) frame, metres.
