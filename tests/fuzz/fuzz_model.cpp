@@ -64,12 +64,12 @@ void checkRoundTrip(const Model& model) {
   if (!st.ok() && std::string_view(kExt) == ".drc" && st.error().code == ErrorCode::kInvalidArgument) {
     // Draco refuses, with its reason, a model whose coordinates span more than a float holds
     // (its quantization range overflows) or one its quantization collapses (load would refuse
-    // the file): triangles tiny against the bounds. 30 bits may still not hold it.
+    // the file): triangles tiny against the bounds. 24 bits (the most) may still not hold it.
     if (st.error().message.find("more than a float holds") != std::string::npos) return;
     check(st.error().message.find("collapses every triangle") != std::string::npos,
           (kTarget + ".save_refusal_explained").c_str(), st.error().message);
     ModelWriteOptions fine;
-    fine.draco_position_bits = 30;
+    fine.draco_position_bits = 24;
     st = saveModel(model, saved, fine);
     if (!st.ok() && st.error().message.find("collapses every triangle") != std::string::npos) return;
   }

@@ -1,6 +1,9 @@
 // Draco (.drc) loading and the decoding of Draco-compressed glTF primitives. Every count read
 // from the stream is checked against the bytes that back it before the decoder allocates.
 #include <draco/compression/decode.h>
+#include <draco/compression/entropy/symbol_decoding.h>
+#include <draco/compression/mesh/mesh_edgebreaker_decoder.h>
+#include <draco/core/varint_decoding.h>
 #include <draco/mesh/mesh.h>
 #include <fmt/format.h>
 
@@ -128,9 +131,88 @@ bool checkDracoCounts(const uint8_t* data, size_t size, std::string& error) {
   return true;
 }
 
+// Draco's Edgebreaker decoder with one check Draco lacks. The texture-coordinate predictors
+// (portable and deprecated) read an orientation count from the stream and decode that many bits
+// whatever the mesh holds: a 226-byte file can ask for 2^31 (seconds of work before the decode
+// fails). A valid stream has at most one orientation per attribute entry. Draco asks the decoder
+// for the attribute's encoding data when it creates the predictor, right after reading the
+// predictor's method and transform bytes and before the values; at that point this decoder reads
+// ahead on a copy of the stream, past the values (decoded as Draco will decode them), to the
+// count, and refuses the stream when the count exceeds the entries. Refusing makes Draco fall
+// back to a delta predictor (linear work); the caller reports the refusal.
+class BoundedEdgebreakerDecoder : public draco::MeshEdgebreakerDecoder {
+ public:
+  // `buffer` is the stream Decode() is given; it must outlive the decoder.
+  explicit BoundedEdgebreakerDecoder(const draco::DecoderBuffer* buffer) : stream_(buffer) {}
+
+  const std::string& refusal() const { return refusal_; }
+
+  const draco::MeshAttributeIndicesEncodingData* GetAttributeEncodingData(int att_id) const override {
+    const draco::MeshAttributeIndicesEncodingData* data = MeshEdgebreakerDecoder::GetAttributeEncodingData(att_id);
+    if (data && refusal_.empty()) refusal_ = checkOrientationCount(att_id, *data);
+    return refusal_.empty() ? data : nullptr;
+  }
+
+ private:
+  // Empty when the stream is fine at this attribute or when it is broken in a way Draco's own
+  // decode reports (the read-ahead then stops without judging).
+  std::string checkOrientationCount(int att_id, const draco::MeshAttributeIndicesEncodingData& data) const {
+    if (stream_->decoded_size() < 2) return {};
+    const char* head = stream_->data_head();
+    const auto method = static_cast<int8_t>(head[-2]);
+    const auto transform = static_cast<int8_t>(head[-1]);
+    const bool portable = method == draco::MESH_PREDICTION_TEX_COORDS_PORTABLE;
+    // Only integer and quantized attributes (wrap transform) get the texture-coordinate predictors.
+    if (transform != draco::PREDICTION_TRANSFORM_WRAP ||
+        (!portable && method != draco::MESH_PREDICTION_TEX_COORDS_DEPRECATED)) {
+      return {};
+    }
+    const uint16_t version = bitstream_version();
+    if (version < DRACO_BITSTREAM_VERSION(2, 0)) {
+      // Quantization data sat between the method and the values then; the count cannot be
+      // located without knowing the attribute's decoder.
+      return fmt::format("texture-coordinate prediction in a version {}.{} Draco stream is not supported", version >> 8,
+                         version & 0xff);
+    }
+    const draco::PointAttribute* att = point_cloud()->attribute(att_id);
+    if (!att || att->num_components() < 1) return {};
+    const uint64_t entries = data.num_values;
+    const uint64_t values = entries * static_cast<uint64_t>(att->num_components());
+    if (values > UINT32_MAX) return {};
+    draco::DecoderBuffer ahead(*stream_);
+    uint8_t compressed = 0;
+    if (!ahead.Decode(&compressed)) return {};
+    if (compressed) {
+      std::vector<uint32_t> symbols(values);
+      if (!draco::DecodeSymbols(static_cast<uint32_t>(values), att->num_components(), &ahead, symbols.data())) {
+        return {};
+      }
+    } else {
+      uint8_t value_bytes = 0;
+      if (!ahead.Decode(&value_bytes) || static_cast<int64_t>(value_bytes * values) > ahead.remaining_size()) return {};
+      ahead.Advance(static_cast<int64_t>(value_bytes * values));
+    }
+    uint32_t count = 0;
+    if (portable) {
+      int32_t signed_count = 0;
+      if (!ahead.Decode(&signed_count) || signed_count < 0) return {};
+      count = static_cast<uint32_t>(signed_count);
+    } else if (version < DRACO_BITSTREAM_VERSION(2, 2) ? !ahead.Decode(&count) : !draco::DecodeVarint(&count, &ahead)) {
+      return {};
+    }
+    if (count <= entries) return {};
+    return fmt::format("texture-coordinate predictor of attribute {} claims {} orientations for {} entries", att_id,
+                       count, entries);
+  }
+
+  const draco::DecoderBuffer* stream_;
+  mutable std::string refusal_;
+};
+
+}  // namespace
+
 // Decodes a Draco triangle mesh. On failure returns null with `error` set; `unsupported` is set
 // when the stream is valid but holds a point cloud.
-}  // namespace
 
 std::unique_ptr<draco::Mesh> decodeDracoMesh(const uint8_t* data, size_t size, std::string& error, bool& unsupported) {
   unsupported = false;
@@ -155,17 +237,39 @@ std::unique_ptr<draco::Mesh> decodeDracoMesh(const uint8_t* data, size_t size, s
     return nullptr;
   }
   if (!checkDracoCounts(data, size, error)) return nullptr;
-  draco::Decoder decoder;
-  auto mesh = decoder.DecodeMeshFromBuffer(&buffer);
-  if (!mesh.ok()) {
-    error = "cannot decode Draco: " + mesh.status().error_msg_string();
+  draco::DecoderBuffer header_buffer(buffer);
+  draco::DracoHeader header;
+  if (!draco::PointCloudDecoder::DecodeHeader(&header_buffer, &header).ok()) {
+    error = "truncated or corrupt Draco header";
     return nullptr;
   }
-  if (!mesh.value()) {
-    error = "cannot decode Draco mesh";
+  if (header.encoder_method != draco::MESH_EDGEBREAKER_ENCODING) {
+    // Sequential meshes have no connectivity for the texture-coordinate predictors.
+    draco::Decoder decoder;
+    auto mesh = decoder.DecodeMeshFromBuffer(&buffer);
+    if (!mesh.ok()) {
+      error = "cannot decode Draco: " + mesh.status().error_msg_string();
+      return nullptr;
+    }
+    if (!mesh.value()) {
+      error = "cannot decode Draco mesh";
+      return nullptr;
+    }
+    return std::move(mesh).value();
+  }
+  BoundedEdgebreakerDecoder decoder(&buffer);
+  auto mesh = std::make_unique<draco::Mesh>();
+  const draco::DecoderOptions options;
+  const draco::Status status = decoder.Decode(options, &buffer, mesh.get());
+  if (!decoder.refusal().empty()) {
+    error = "corrupt Draco stream: " + decoder.refusal();
     return nullptr;
   }
-  return std::move(mesh).value();
+  if (!status.ok()) {
+    error = "cannot decode Draco: " + status.error_msg_string();
+    return nullptr;
+  }
+  return mesh;
 }
 
 // Reads `comps` components per point as floats (normalized integers as 0..1).

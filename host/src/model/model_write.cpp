@@ -93,8 +93,10 @@ Status checkModel(const Model& m, const std::string& path) {
 }
 
 Status checkOptions(const ModelWriteOptions& o, const std::string& path) {
-  if (o.draco_position_bits < 1 || o.draco_position_bits > 30 || o.draco_uv_bits < 1 || o.draco_uv_bits > 30)
-    return fileError(ErrorCode::kInvalidArgument, path, "Draco quantization bits must be in 1..30");
+  // Draco's entropy coder counts symbols in a table as long as the largest one (up to
+  // 2^(bits + 1) for sparse geometry): 24 bits keep it within 128 MiB, 30 asked for 4 GiB.
+  if (o.draco_position_bits < 1 || o.draco_position_bits > 24 || o.draco_uv_bits < 1 || o.draco_uv_bits > 24)
+    return fileError(ErrorCode::kInvalidArgument, path, "Draco quantization bits must be in 1..24");
   if (o.draco_speed < 0 || o.draco_speed > 10)
     return fileError(ErrorCode::kInvalidArgument, path, "Draco speed must be in 0..10");
   return Status::success();
@@ -311,6 +313,46 @@ struct DracoBlob {
   bool has_area = false;              ///< Whether a decoded triangle has an area.
 };
 
+Error collapsedError(const std::string& path, const ModelWriteOptions& o) {
+  return fileError(ErrorCode::kInvalidArgument, path,
+                   fmt::format("Draco's {}-bit position quantization collapses every triangle; save with more "
+                               "position bits or as .ply/.obj",
+                               o.draco_position_bits));
+}
+
+/// Whether a triangle keeps an area once the positions are quantized to `bits` as Draco does
+/// (x, y, z per vertex; finite ranges, checked before).
+bool quantizedTriangleWithArea(const std::vector<float>& positions, const std::vector<uint32_t>& indices, int bits) {
+  float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
+                 std::numeric_limits<float>::max()};
+  float hi[3] = {std::numeric_limits<float>::lowest(), std::numeric_limits<float>::lowest(),
+                 std::numeric_limits<float>::lowest()};
+  for (size_t i = 0; i < positions.size(); ++i) lo[i % 3] = std::min(lo[i % 3], positions[i]);
+  for (size_t i = 0; i < positions.size(); ++i) hi[i % 3] = std::max(hi[i % 3], positions[i]);
+  float range = 0.0f;
+  for (int k = 0; k < 3; ++k) range = std::max(range, hi[k] - lo[k]);
+  if (range == 0.0f) range = 1.0f;
+  const float scale = static_cast<float>((int64_t{1} << bits) - 1) / range;
+  const int64_t top = (int64_t{1} << bits) - 1;
+  const auto quantized = [&](uint32_t vertex, int k) -> int64_t {
+    const float v = std::floor((positions[3 * size_t{vertex} + static_cast<size_t>(k)] - lo[k]) * scale + 0.5f);
+    if (!(v > 0.0f)) return 0;  // also NaN, from an infinite scale over a zero offset
+    return v >= static_cast<float>(top) ? top : static_cast<int64_t>(v);
+  };
+  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    int64_t e1[3], e2[3];  // |coordinate| < 2^30, so every product below fits
+    for (int k = 0; k < 3; ++k) {
+      const int64_t a = quantized(indices[t], k);
+      e1[k] = quantized(indices[t + 1], k) - a;
+      e2[k] = quantized(indices[t + 2], k) - a;
+    }
+    if (e1[1] * e2[2] != e1[2] * e2[1] || e1[2] * e2[0] != e1[0] * e2[2] || e1[0] * e2[1] != e1[1] * e2[0]) {
+      return true;
+    }
+  }
+  return false;
+}
+
 /// Encodes vertices (positions, optional uvs and RGBA colours) and triangles; `flip_v` stores
 /// v' = 1 - v.
 Result<DracoBlob> encodeDraco(const std::vector<float>& positions, const std::vector<float>& uvs,
@@ -338,6 +380,11 @@ Result<DracoBlob> encodeDraco(const std::vector<float>& positions, const std::ve
   };
   VKLOC_TRY_STATUS(checkRange(positions, "xyz", "position"));
   VKLOC_TRY_STATUS(checkRange(uvs, "uv", "texture coordinate"));
+  // What load would refuse is not written, and Draco's encoder is not given it: quantization can
+  // collapse every triangle of a model that is small against its bounds (its encoder then asked
+  // for 4 GiB on a 12-triangle model, a fuzz finding). Positions are quantized here as Draco
+  // does: per-axis minimum, one step for all axes from the largest range, rounded in float.
+  if (!quantizedTriangleWithArea(positions, indices, o.draco_position_bits)) return collapsedError(path, o);
   draco::Mesh mesh;
   mesh.set_num_points(n);
   auto add = [&](draco::GeometryAttribute::Type type, int components, draco::DataType dt, bool normalized,
@@ -411,13 +458,9 @@ Result<DracoBlob> encodeDraco(const std::vector<float>& positions, const std::ve
 Status writeDrc(const Model& m, const std::string& path, const ModelWriteOptions& o, AtomicFileSet& files) {
   auto blob = encodeDraco(m.positions, m.uvs, m.colors, m.indices, true, o, path);
   if (!blob.ok()) return blob.error();
-  // What load would refuse is not written: quantization can collapse every triangle of a model
-  // that is small against its bounds.
+  // Checked before encoding as well; this catches what Draco's own rounding collapses.
   if (!blob->has_area) {
-    return fileError(ErrorCode::kInvalidArgument, path,
-                     fmt::format("Draco's {}-bit position quantization collapses every triangle; save with more "
-                                 "position bits or as .ply/.obj",
-                                 o.draco_position_bits));
+    return collapsedError(path, o);
   }
   return files.write(path, blob->bytes.data(), blob->bytes.size());
 }

@@ -13,8 +13,8 @@ struct ModelWriteOptions {
   /// .gltf / .glb: compress every primitive with KHR_draco_mesh_compression (listed in
   /// extensionsUsed and extensionsRequired). Ignored by the other formats.
   bool draco = false;
-  int draco_position_bits = 14;  ///< Draco position quantization, bits per coordinate (1..30).
-  int draco_uv_bits = 12;        ///< Draco texture-coordinate quantization, bits (1..30).
+  int draco_position_bits = 14;  ///< Draco position quantization, bits per coordinate (1..24).
+  int draco_uv_bits = 12;        ///< Draco texture-coordinate quantization, bits (1..24).
   int draco_speed = 5;           ///< Draco encoder and decoder speed, 0 (smallest) .. 10 (fastest).
 };
 
