@@ -254,6 +254,16 @@ void run(const TrackArgs& a) {
   }
   long first_tracked = -1;
   double first_frame_ms = 0;
+  // Longest run of consecutive frames posed by the IMU alone, and its length in seconds (from
+  // its first frame to one frame interval past its last).
+  size_t inertial_run = 0, inertial_longest = 0;
+  int64_t inertial_run_start_ns = 0;
+  double inertial_longest_s = 0.0;
+  std::vector<double> intervals_s;
+  for (size_t i = first + 1; i < first + total; ++i) {
+    intervals_s.push_back(static_cast<double>(seq.images[i].t_ns - seq.images[i - 1].t_ns) * 1e-9);
+  }
+  const double frame_interval_s = intervals_s.empty() ? 0.0 : median(intervals_s);
   const auto t_frames = std::chrono::steady_clock::now();
   try {
     for (size_t i = first; i < first + total; ++i) {
@@ -273,6 +283,14 @@ void run(const TrackArgs& a) {
       if (tracking && first_tracked < 0) first_tracked = static_cast<long>(i);
       lost_after_first += !has_pose && first_tracked >= 0;
       inertial += f.state == TrackingState::kInertial;
+      if (f.state == TrackingState::kInertial) {
+        if (inertial_run++ == 0) inertial_run_start_ns = entry.t_ns;
+        inertial_longest = std::max(inertial_longest, inertial_run);
+        inertial_longest_s = std::max(
+            inertial_longest_s, static_cast<double>(entry.t_ns - inertial_run_start_ns) * 1e-9 + frame_interval_s);
+      } else {
+        inertial_run = 0;
+      }
       rejected += f.visual_rejected;
       no_content += f.image_content != ImageContent::kOk;
       if (has_pose) {
@@ -358,10 +376,10 @@ void run(const TrackArgs& a) {
       "{:.3f},\n"
       "  \"hz_median\": {:.3f},\n  \"first_tracked_frame\": {},\n  \"lost_after_first_tracked\": {},\n  "
       "\"scene_depth_median_m\": {:.6g},\n  \"relocalized\": {},\n  \"initializing\": {},\n  "
-      "\"no_image_content\": {}",
+      "\"no_image_content\": {},\n  \"inertial_longest_frames\": {},\n  \"inertial_longest_s\": {:.3f}",
       seq.name, total, lost, inertial, rejected, rerendered, localizerBackendName(options.backend), a.localizer.policy,
       setup_ms, first_frame_ms, total_ms.empty() ? 0.0 : median(total_ms), hz, first_tracked, lost_after_first,
-      median(depths), relocalized, initializing, no_content);
+      median(depths), relocalized, initializing, no_content, inertial_longest, inertial_longest_s);
   std::filesystem::path report_dir = a.report_dir.empty()
                                          ? out_path.parent_path() / (out_path.stem().string() + "_report")
                                          : std::filesystem::path(a.report_dir);

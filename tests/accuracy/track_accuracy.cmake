@@ -4,8 +4,9 @@
 #   castle_offset  same from a first pose 2 cm / 5 deg off: converges (none lost, mean <= 2 mm, 0.2 deg)
 # Each case runs with keyframes on the worker thread (the default) and made synchronously.
 #   city_hard, room_hard  simulated: per policy (every-frame, when-needed) no frame lost (at most a
-#                  quarter bridged by the IMU alone; 30 % with the worker, see below), median
-#                  translation error <= 0.5 % of the median scene depth, median rotation <= 0.3 deg.
+#                  quarter bridged by the IMU alone; 30 % with the worker, see below), no stretch
+#                  bridged by the IMU alone longer than 0.5 s, median translation error <= 0.5 % of
+#                  the median scene depth, median rotation <= 0.3 deg.
 #                  These limits were set with the window fit; with the EKF (`vkloc track`'s default)
 #                  room hard bridges 24 (sync) and 52-62 (worker) of 100 frames by the IMU alone:
 #                  its gate drifts off on the simulator's blurred frames (tests *_hard_ekf, open).
@@ -22,10 +23,12 @@ function(track_and_check label seq policy mode extra)
       --report ${dir}/report --policy ${policy} --keyframes ${mode} --quiet ${extra})
   set(j ${dir}/report/track.json)
   foreach(key frames lost inertial visual_rejected hz_median startup_ms first_frame_ms scene_depth_median_m translation_median_m
-              translation_mean_m rotation_median_deg rotation_mean_deg localized_fraction translation_median_over_depth)
+              translation_mean_m rotation_median_deg rotation_mean_deg localized_fraction translation_median_over_depth
+              inertial_longest_s)
     json_number(${key} ${j} ${key})
   endforeach()
-  message(STATUS "${label} ${policy} ${mode}: ${frames} frames, lost ${lost}, inertial only ${inertial} (visual rejected "
+  message(STATUS "${label} ${policy} ${mode}: ${frames} frames, lost ${lost}, inertial only ${inertial} (longest "
+                 "${inertial_longest_s} s; visual rejected "
                  "${visual_rejected}), translation median ${translation_median_m} m "
                  "mean ${translation_mean_m} m, rotation median ${rotation_median_deg} deg mean ${rotation_mean_deg} "
                  "deg, scene depth ${scene_depth_median_m} m, ${hz_median} Hz (start-up ${startup_ms} ms, first "
@@ -55,6 +58,10 @@ function(track_and_check label seq policy mode extra)
   endif()
   if(inertial GREATER inertial_limit)
     string(APPEND bad " ${inertial} frames inertial only (> ${inertial_limit});")
+  endif()
+  # Simulated scenarios: no stretch bridged by the IMU alone longer than 0.5 s.
+  if(NOT label MATCHES "^castle" AND inertial_longest_s GREATER 0.5)
+    string(APPEND bad " ${inertial_longest_s} s inertial only in one stretch (> 0.5 s);")
   endif()
   if(label MATCHES "^castle")
     if(translation_mean_m GREATER 0.002)

@@ -10,6 +10,8 @@
 #include <random>
 #include <vector>
 
+#include "vkloc/sim/demo_models.hpp"
+
 namespace vkloc {
 namespace {
 
@@ -443,6 +445,68 @@ TEST(Generators, DroneFlightStaysInItsEnvelope) {
     EXPECT_LT(e.peak_speed, 9.0);
     EXPECT_LT(e.peak_rate, 1.0);
   }
+}
+
+// A 100 m ground square at z = 0 and a 10 m tower top at z = 30 over [10, 20] x [10, 20].
+Model groundAndTower() {
+  Model m;
+  m.positions = {-50, -50, 0, 50, -50, 0, 50, 50, 0, -50, 50, 0, 10, 10, 30, 20, 10, 30, 20, 20, 30, 10, 20, 30};
+  m.indices = {0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7};
+  m.materials.push_back(Material{"paint", {1, 1, 1, 1}, -1});
+  m.ranges.push_back(DrawRange{0, 12, 0});
+  buildBlocks(m, 32768);
+  return m;
+}
+
+TEST(HeightField, HoldsTheHighestGeometryWithinTheRadius) {
+  const auto field = HeightField::fromModel(groundAndTower(), 5.0);
+  ASSERT_TRUE(field.ok()) << field.error().message;
+  EXPECT_DOUBLE_EQ(field->top(15.0, 15.0), 30.0);
+  EXPECT_DOUBLE_EQ(field->top(24.5, 15.0), 30.0);  // 4.5 m beside the tower
+  EXPECT_DOUBLE_EQ(field->top(26.5, 15.0), 0.0);   // 6.5 m beside it: the ground
+  EXPECT_DOUBLE_EQ(field->top(-40.0, -40.0), 0.0);
+  EXPECT_EQ(field->top(-60.0, 0.0), -std::numeric_limits<double>::infinity());
+  EXPECT_EQ(field->top(std::nan(""), 0.0), -std::numeric_limits<double>::infinity());
+  EXPECT_TRUE(HeightField().empty());
+  EXPECT_FALSE(HeightField::fromModel(Model{}, 5.0).ok());
+  EXPECT_FALSE(HeightField::fromModel(groundAndTower(), -1.0).ok());
+  EXPECT_FALSE(HeightField::fromModel(groundAndTower(), 5.0, 0.0).ok());
+}
+
+// The drone keeps its clearance over the demo city's buildings, climbing at a drone's rate;
+// without the height field the same paths pass below a roof (so the check can fail).
+TEST(Generators, DroneFliesOverTheCityNotThroughIt) {
+  const Model city = makeDemoCity();
+  const auto obstacles = HeightField::fromModel(city, 5.0);
+  const auto under = HeightField::fromModel(city, 1.0);
+  ASSERT_TRUE(obstacles.ok() && under.ok());
+  double lowest_without = 1e9;
+  for (TrajectoryKind kind : {TrajectoryKind::kDroneFlight, TrajectoryKind::kDroneAgile}) {
+    for (uint64_t seed : {1u, 2u, 3u}) {
+      SCOPED_TRACE(seed);
+      TrajectoryOptions o;
+      o.kind = kind;
+      o.duration_s = 60.0;
+      o.seed = seed;
+      o.T_body_camera = mounting();
+      auto free = makeTrajectory(o, city.bounds);
+      o.obstacles = *obstacles;
+      auto clear = makeTrajectory(o, city.bounds);
+      ASSERT_TRUE(free.ok() && clear.ok());
+      double lowest = 1e9, fastest_climb = 0.0;
+      for (int64_t t = clear->startNs(); t <= clear->endNs(); t += 50000000) {
+        const TrajectoryState st = clear->evaluate(t);
+        const Vector3d eye = (st.T_world_body * o.T_body_camera).translation();
+        lowest = std::min(lowest, eye.z() - under->top(eye.x(), eye.y()));
+        fastest_climb = std::max(fastest_climb, std::abs(st.v_world_body.z()));
+        const Vector3d free_eye = (free->evaluate(t).T_world_body * o.T_body_camera).translation();
+        lowest_without = std::min(lowest_without, free_eye.z() - under->top(free_eye.x(), free_eye.y()));
+      }
+      EXPECT_GT(lowest, 9.0);
+      EXPECT_LT(fastest_climb, 3.5);  // 2 m/s from the envelope, plus the planned altitude changes
+    }
+  }
+  EXPECT_LT(lowest_without, 5.0);
 }
 
 TEST(Generators, HandheldStaysInsideTheRoom) {

@@ -254,13 +254,32 @@ Result<ImageU8> simulateFrame(Renderer& renderer, const SplineTrajectory& trajec
   return encodeImage(sum, a.gamma);
 }
 
-Result<SplineTrajectory> simulationTrajectory(const SimulationOptions& options, const Aabb& scene_bounds) {
+namespace {
+
+TrajectoryOptions trajectoryOptions(const SimulationOptions& options) {
   TrajectoryOptions t;
   t.kind = options.trajectory;
   t.duration_s = options.duration_s;
   t.seed = subSeed(options.seed, 1);
   t.T_body_camera = options.camera.T_body_camera;
-  return makeTrajectory(t, scene_bounds);
+  return t;
+}
+
+}  // namespace
+
+Result<SplineTrajectory> simulationTrajectory(const SimulationOptions& options, const Aabb& scene_bounds) {
+  return makeTrajectory(trajectoryOptions(options), scene_bounds);
+}
+
+Result<SplineTrajectory> simulationTrajectory(const SimulationOptions& options, const Model& model) {
+  TrajectoryOptions t = trajectoryOptions(options);
+  if (t.kind == TrajectoryKind::kDroneFlight || t.kind == TrajectoryKind::kDroneAgile) {
+    // A drone flies over the buildings, not through them: 10 m above anything within 5 m.
+    auto obstacles = HeightField::fromModel(model, 5.0);
+    if (!obstacles.ok()) return obstacles.error();
+    t.obstacles = std::move(*obstacles);
+  }
+  return makeTrajectory(t, model.bounds);
 }
 
 Result<SimulationReport> simulateSequence(const Model& model, const SimulationOptions& options,
@@ -279,7 +298,7 @@ Result<SimulationReport> simulateSequence(const Model& model, const SimulationOp
   const uint64_t seed = options.seed;
 
   // Trajectory and sensors.
-  auto trajectory = simulationTrajectory(options, model.bounds);
+  auto trajectory = simulationTrajectory(options, model);
   if (!trajectory.ok()) return trajectory.error();
 
   Sequence seq;

@@ -110,10 +110,11 @@ KnotTimes makeKnots(double duration_s, double nominal_dt_s) {
 // ------------------------------------------------------------------------------------------------
 
 /// Drone: a wobbly loop around the box centre (radius up to 0.65 of the half extent, slowly
-/// breathing in and out), 20-50 m above the box floor, horizontal speed 3.5-7 m/s, heading along
-/// the path, camera 45 deg below the horizon.
+/// breathing in and out), 23-47 m above the box floor and at least `options.drone_clearance_m`
+/// above `options.obstacles`, horizontal speed 3.5-7 m/s, heading along the path, camera 45 deg
+/// below the horizon.
 Result<std::vector<Pose>> droneCameraPoses(const BoxFrame& box, const KnotTimes& knots, Mt19937& rnd,
-                                           bool agile = false) {
+                                           const TrajectoryOptions& options, bool agile = false) {
   const Eigen::Vector3d c = box.centre();
   const Eigen::Vector3d h = box.half();
   const double ax = 0.65 * h.x();
@@ -151,12 +152,33 @@ Result<std::vector<Pose>> droneCameraPoses(const BoxFrame& box, const KnotTimes&
   const double fp1 = rnd.uniform(0.45, 0.75), fp2 = rnd.uniform(0.9, 1.2);
   const double pr1 = rnd.uniform(0.0, 2.0 * kPi), pr2 = rnd.uniform(0.0, 2.0 * kPi);
   const double pp1 = rnd.uniform(0.0, 2.0 * kPi), pp2 = rnd.uniform(0.0, 2.0 * kPi);
+  std::vector<double> heights(theta.size());
+  for (size_t k = 0; k < theta.size(); ++k) {
+    const double t = knots.times_s[k];
+    heights[k] =
+        box.min.z() + 35.0 + 8.0 * std::sin(2.0 * kPi * t / 60.0 + z1) + 4.0 * std::sin(2.0 * kPi * t / 25.0 + z2);
+  }
+  if (!options.obstacles.empty()) {
+    // Clearance over the buildings on the way: the upper envelope of (top + clearance) cones
+    // sloping down at the climb rate in time, so the drone climbs before it reaches them.
+    std::vector<double> needed(theta.size());
+    for (size_t k = 0; k < theta.size(); ++k) {
+      const Eigen::Vector2d xy = curve(theta[k]);
+      needed[k] = options.obstacles.top(xy.x(), xy.y()) + options.drone_clearance_m;
+    }
+    for (size_t k = 0; k < theta.size(); ++k) {
+      for (size_t j = 0; j < theta.size(); ++j) {
+        if (!std::isfinite(needed[j])) continue;
+        const double dt = std::abs(knots.times_s[k] - knots.times_s[j]);
+        heights[k] = std::max(heights[k], needed[j] - options.drone_climb_rate * dt);
+      }
+    }
+  }
   std::vector<Pose> poses;
   for (size_t k = 0; k < theta.size(); ++k) {
     const double t = knots.times_s[k];
     const Eigen::Vector2d xy = curve(theta[k]);
-    const double z =
-        box.min.z() + 35.0 + 8.0 * std::sin(2.0 * kPi * t / 60.0 + z1) + 4.0 * std::sin(2.0 * kPi * t / 25.0 + z2);
+    const double z = heights[k];
     const Eigen::Vector2d tangent = dir * (curve(theta[k] + 1e-5) - curve(theta[k] - 1e-5));
     const double yaw = std::atan2(tangent.y(), tangent.x());
     const Eigen::Vector3d eye(xy.x(), xy.y(), z);
@@ -427,6 +449,57 @@ const char* trajectoryKindName(TrajectoryKind kind) {
   return "unknown";
 }
 
+Result<HeightField> HeightField::fromModel(const Model& model, double radius_m, double cell_m) {
+  if (model.triangleCount() == 0 || model.bounds.empty()) {
+    return makeError(ErrorCode::kInvalidArgument, "HeightField: the model has no triangles");
+  }
+  if (!std::isfinite(cell_m) || cell_m <= 0.0 || !std::isfinite(radius_m) || radius_m < 0.0) {
+    return makeError(ErrorCode::kInvalidArgument, "HeightField: the cell must be positive and the radius non-negative");
+  }
+  constexpr int kMaxSide = 2048;
+  const double extent_x = double(model.bounds.max[0]) - model.bounds.min[0];
+  const double extent_y = double(model.bounds.max[1]) - model.bounds.min[1];
+  HeightField field;
+  field.cell_ = std::max(cell_m, std::max(extent_x, extent_y) / (kMaxSide - 1));
+  field.x0_ = model.bounds.min[0];
+  field.y0_ = model.bounds.min[1];
+  field.width_ = static_cast<int>(std::floor(extent_x / field.cell_)) + 1;
+  field.height_ = static_cast<int>(std::floor(extent_y / field.cell_)) + 1;
+  const float none = -std::numeric_limits<float>::infinity();
+  std::vector<float> raw(size_t(field.width_) * field.height_, none);
+  const auto cellOf = [&](double v, double origin, int size) {
+    return std::clamp(static_cast<int>(std::floor((v - origin) / field.cell_)), 0, size - 1);
+  };
+  // Each triangle's highest corner over the cells its xy bounding box widened by the radius covers.
+  for (size_t t = 0; t < model.triangleCount(); ++t) {
+    double lo[2] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+    double hi[2] = {-lo[0], -lo[1]};
+    float z = none;
+    for (int c = 0; c < 3; ++c) {
+      const float* p = &model.positions[3 * size_t{model.indices[3 * t + c]}];
+      for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], double(p[a])), hi[a] = std::max(hi[a], double(p[a]));
+      z = std::max(z, p[2]);
+    }
+    const int x_lo = cellOf(lo[0] - radius_m, field.x0_, field.width_);
+    const int x_hi = cellOf(hi[0] + radius_m, field.x0_, field.width_);
+    const int y_lo = cellOf(lo[1] - radius_m, field.y0_, field.height_);
+    const int y_hi = cellOf(hi[1] + radius_m, field.y0_, field.height_);
+    for (int y = y_lo; y <= y_hi; ++y) {
+      float* row = &raw[size_t(y) * field.width_];
+      for (int x = x_lo; x <= x_hi; ++x) row[x] = std::max(row[x], z);
+    }
+  }
+  field.tops_ = std::move(raw);
+  return field;
+}
+
+double HeightField::top(double x, double y) const {
+  if (tops_.empty() || !std::isfinite(x) || !std::isfinite(y)) return -std::numeric_limits<double>::infinity();
+  const double cx = std::floor((x - x0_) / cell_), cy = std::floor((y - y0_) / cell_);
+  if (cx < 0.0 || cy < 0.0 || cx >= width_ || cy >= height_) return -std::numeric_limits<double>::infinity();
+  return tops_[static_cast<size_t>(cy) * width_ + static_cast<size_t>(cx)];
+}
+
 Result<SplineTrajectory> makeTrajectory(const TrajectoryOptions& options, const Aabb& scene_bounds) {
   if (scene_bounds.empty()) return makeError(ErrorCode::kInvalidArgument, "makeTrajectory: scene bounds are empty");
   BoxFrame box;
@@ -451,10 +524,10 @@ Result<SplineTrajectory> makeTrajectory(const TrajectoryOptions& options, const 
   Result<std::vector<Pose>> cameras = std::vector<Pose>{};
   switch (options.kind) {
     case TrajectoryKind::kDroneFlight:
-      cameras = droneCameraPoses(box, knots, rnd);
+      cameras = droneCameraPoses(box, knots, rnd, options);
       break;
     case TrajectoryKind::kDroneAgile:
-      cameras = droneCameraPoses(box, knots, rnd, true);
+      cameras = droneCameraPoses(box, knots, rnd, options, true);
       break;
     case TrajectoryKind::kHandheld:
       cameras = walkCameraPoses(box, knots, rnd, WalkParams{});

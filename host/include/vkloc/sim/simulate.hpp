@@ -206,8 +206,10 @@ Result<SequenceCamera> scenarioCamera(const std::string& lens, TrajectoryKind ki
 /// from the body's forward axis (body x forward, y left, z up), the handheld ones look forward.
 Pose defaultBodyCamera(TrajectoryKind kind);
 
-/// The trajectory simulateSequence uses for `options` in a scene with `scene_bounds` (seed
-/// derived from options.seed).
+/// The trajectory simulateSequence uses for `options` in `model` (seed derived from
+/// options.seed): inside the model's bounds, drones 10 m above any geometry within 5 m.
+Result<SplineTrajectory> simulationTrajectory(const SimulationOptions& options, const Model& model);
+/// The same trajectory in an empty box `scene_bounds` (nothing to fly over but its floor).
 Result<SplineTrajectory> simulationTrajectory(const SimulationOptions& options, const Aabb& scene_bounds);
 
 /// Progress callback: images written so far and the total.

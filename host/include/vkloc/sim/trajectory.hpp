@@ -41,7 +41,7 @@ class SplineTrajectory {
 
 /// Kinds of built-in trajectories.
 enum class TrajectoryKind {
-  kDroneFlight,  ///< 10-60 m above ground, camera tilted 45 deg down, smooth turns (city).
+  kDroneFlight,  ///< 23-47 m above the box floor and clear of buildings, camera tilted 45 deg down (city).
   kDroneAgile,   ///< The drone's path with fast roll and pitch of the airframe (+-25 deg, ~1 Hz).
   kHandheld,     ///< Walking pace, 1.2-1.8 m high, gentle head motion (room).
   kAggressive,   ///< Fast rotations (up to ~3 rad/s) and accelerations, handheld scale.
@@ -51,6 +51,26 @@ enum class TrajectoryKind {
 Result<TrajectoryKind> parseTrajectoryKind(const std::string& name);
 const char* trajectoryKindName(TrajectoryKind kind);
 
+/// The scene's highest geometry seen from above, for drones to fly over: a grid over the model's
+/// xy extent (world frame, z up) whose cells hold the largest z (metres) of any triangle whose xy
+/// bounding box comes within `radius_m` of the cell. Conservative: a sloped triangle counts with
+/// its highest corner over its whole bounding box. A default-constructed field is empty.
+class HeightField {
+ public:
+  /// Cells of `cell_m` metres, coarser when the extent would need more than 2048 per side.
+  /// kInvalidArgument for a model without triangles or a non-finite, non-positive cell or
+  /// negative radius.
+  static Result<HeightField> fromModel(const Model& model, double radius_m, double cell_m = 1.0);
+  /// Highest z (metres) near (x, y); -infinity outside the grid or where no triangle is near.
+  double top(double x, double y) const;
+  bool empty() const { return tops_.empty(); }
+
+ private:
+  double x0_ = 0.0, y0_ = 0.0, cell_ = 1.0;
+  int width_ = 0, height_ = 0;
+  std::vector<float> tops_;
+};
+
 struct TrajectoryOptions {
   TrajectoryKind kind = TrajectoryKind::kDroneFlight;
   double duration_s = 10.0;  ///< Length of the usable part of the spline, seconds.
@@ -58,6 +78,12 @@ struct TrajectoryOptions {
   /// Camera mounting on the body; the generators place the *camera* so that it sees the scene
   /// (e.g. 45 deg down for the drone) and derive T_world_body = T_world_camera T_body_camera^-1.
   Pose T_body_camera = Pose::Identity();
+  /// Drone kinds: what to fly over. The drone keeps `drone_clearance_m` above it, climbing
+  /// (and descending) at most `drone_climb_rate` metres per second of flight so that it is
+  /// already high enough when it reaches a tall building. Empty: only the box floor counts.
+  HeightField obstacles;
+  double drone_clearance_m = 10.0;  ///< Metres above `obstacles`.
+  double drone_climb_rate = 2.0;    ///< Metres per second.
 };
 
 /// Builds a trajectory that keeps the camera viewing the model inside `scene_bounds` (world
