@@ -507,6 +507,12 @@ TEST(Generators, DroneFliesOverTheCityNotThroughIt) {
     }
   }
   EXPECT_LT(lowest_without, 5.0);
+  TrajectoryOptions bad;
+  bad.drone_climb_rate = 0.0;
+  EXPECT_FALSE(makeTrajectory(bad, city.bounds).ok());
+  bad.drone_climb_rate = 2.0;
+  bad.drone_clearance_m = std::nan("");
+  EXPECT_FALSE(makeTrajectory(bad, city.bounds).ok());
 }
 
 TEST(Generators, HandheldStaysInsideTheRoom) {

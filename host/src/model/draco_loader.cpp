@@ -146,6 +146,8 @@ class BoundedEdgebreakerDecoder : public draco::MeshEdgebreakerDecoder {
   explicit BoundedEdgebreakerDecoder(const draco::DecoderBuffer* buffer) : stream_(buffer) {}
 
   const std::string& refusal() const { return refusal_; }
+  /// Whether the refusal is of a valid stream this check cannot judge (not a corrupt one).
+  bool refusalUnsupported() const { return unsupported_; }
 
   const draco::MeshAttributeIndicesEncodingData* GetAttributeEncodingData(int att_id) const override {
     const draco::MeshAttributeIndicesEncodingData* data = MeshEdgebreakerDecoder::GetAttributeEncodingData(att_id);
@@ -171,6 +173,7 @@ class BoundedEdgebreakerDecoder : public draco::MeshEdgebreakerDecoder {
     if (version < DRACO_BITSTREAM_VERSION(2, 0)) {
       // Quantization data sat between the method and the values then; the count cannot be
       // located without knowing the attribute's decoder.
+      unsupported_ = true;
       return fmt::format("texture-coordinate prediction in a version {}.{} Draco stream is not supported", version >> 8,
                          version & 0xff);
     }
@@ -207,6 +210,7 @@ class BoundedEdgebreakerDecoder : public draco::MeshEdgebreakerDecoder {
 
   const draco::DecoderBuffer* stream_;
   mutable std::string refusal_;
+  mutable bool unsupported_ = false;
 };
 
 }  // namespace
@@ -262,7 +266,8 @@ std::unique_ptr<draco::Mesh> decodeDracoMesh(const uint8_t* data, size_t size, s
   const draco::DecoderOptions options;
   const draco::Status status = decoder.Decode(options, &buffer, mesh.get());
   if (!decoder.refusal().empty()) {
-    error = "corrupt Draco stream: " + decoder.refusal();
+    unsupported = decoder.refusalUnsupported();
+    error = (unsupported ? "Draco stream: " : "corrupt Draco stream: ") + decoder.refusal();
     return nullptr;
   }
   if (!status.ok()) {

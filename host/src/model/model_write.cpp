@@ -321,7 +321,7 @@ Error collapsedError(const std::string& path, const ModelWriteOptions& o) {
 }
 
 /// Whether a triangle keeps an area once the positions are quantized to `bits` as Draco does
-/// (x, y, z per vertex; finite ranges, checked before).
+/// (x, y, z per vertex); true for a range that overflows a float (refused elsewhere).
 bool quantizedTriangleWithArea(const std::vector<float>& positions, const std::vector<uint32_t>& indices, int bits) {
   float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
                  std::numeric_limits<float>::max()};
@@ -331,6 +331,7 @@ bool quantizedTriangleWithArea(const std::vector<float>& positions, const std::v
   for (size_t i = 0; i < positions.size(); ++i) hi[i % 3] = std::max(hi[i % 3], positions[i]);
   float range = 0.0f;
   for (int k = 0; k < 3; ++k) range = std::max(range, hi[k] - lo[k]);
+  if (!std::isfinite(range)) return true;  // refused by encodeDraco's range check, with its reason
   if (range == 0.0f) range = 1.0f;
   const float scale = static_cast<float>((int64_t{1} << bits) - 1) / range;
   const int64_t top = (int64_t{1} << bits) - 1;
@@ -340,7 +341,7 @@ bool quantizedTriangleWithArea(const std::vector<float>& positions, const std::v
     return v >= static_cast<float>(top) ? top : static_cast<int64_t>(v);
   };
   for (size_t t = 0; t + 2 < indices.size(); t += 3) {
-    int64_t e1[3], e2[3];  // |coordinate| < 2^30, so every product below fits
+    int64_t e1[3], e2[3];  // coordinates below 2^24 (the most bits): every product fits
     for (int k = 0; k < 3; ++k) {
       const int64_t a = quantized(indices[t], k);
       e1[k] = quantized(indices[t + 1], k) - a;
@@ -380,11 +381,6 @@ Result<DracoBlob> encodeDraco(const std::vector<float>& positions, const std::ve
   };
   VKLOC_TRY_STATUS(checkRange(positions, "xyz", "position"));
   VKLOC_TRY_STATUS(checkRange(uvs, "uv", "texture coordinate"));
-  // What load would refuse is not written, and Draco's encoder is not given it: quantization can
-  // collapse every triangle of a model that is small against its bounds (its encoder then asked
-  // for 4 GiB on a 12-triangle model, a fuzz finding). Positions are quantized here as Draco
-  // does: per-axis minimum, one step for all axes from the largest range, rounded in float.
-  if (!quantizedTriangleWithArea(positions, indices, o.draco_position_bits)) return collapsedError(path, o);
   draco::Mesh mesh;
   mesh.set_num_points(n);
   auto add = [&](draco::GeometryAttribute::Type type, int components, draco::DataType dt, bool normalized,
@@ -456,6 +452,11 @@ Result<DracoBlob> encodeDraco(const std::vector<float>& positions, const std::ve
 }
 
 Status writeDrc(const Model& m, const std::string& path, const ModelWriteOptions& o, AtomicFileSet& files) {
+  // What load would refuse is not written, and Draco's encoder is not given it: quantization can
+  // collapse every triangle of a model that is small against its bounds. Positions are quantized
+  // here as Draco does: per-axis minimum, one step for all axes from the largest range, rounded
+  // in float. (A glTF primitive may collapse alone; the model keeps area through the others.)
+  if (!quantizedTriangleWithArea(m.positions, m.indices, o.draco_position_bits)) return collapsedError(path, o);
   auto blob = encodeDraco(m.positions, m.uvs, m.colors, m.indices, true, o, path);
   if (!blob.ok()) return blob.error();
   // Checked before encoding as well; this catches what Draco's own rounding collapses.

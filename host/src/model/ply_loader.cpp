@@ -275,6 +275,9 @@ Result<Model> loadPly(const std::string& path, const std::vector<uint8_t>& bytes
   for (const PlyElement& e : elements) {
     const bool is_vertex = &e == &*vertex;
     const bool is_face = e.name == "face";
+    // A binary element without properties holds no bytes, whatever its count claims (2^64 such
+    // instances would be read from nothing): skipped. ASCII instances take a line each.
+    if (format != "ascii" && e.properties.empty()) continue;
     for (uint64_t i = 0; i < e.count; ++i) {
       if (!reader.beginInstance()) {
         return fileError(

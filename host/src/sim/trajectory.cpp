@@ -161,18 +161,23 @@ Result<std::vector<Pose>> droneCameraPoses(const BoxFrame& box, const KnotTimes&
   if (!options.obstacles.empty()) {
     // Clearance over the buildings on the way: the upper envelope of (top + clearance) cones
     // sloping down at the climb rate in time, so the drone climbs before it reaches them.
-    std::vector<double> needed(theta.size());
-    for (size_t k = 0; k < theta.size(); ++k) {
+    // max_j (needed_j - rate |t_k - t_j|) in two linear passes (forward, then backward); -inf
+    // (nothing below) constrains nothing.
+    const size_t n = theta.size();
+    std::vector<double> envelope(n);
+    for (size_t k = 0; k < n; ++k) {
       const Eigen::Vector2d xy = curve(theta[k]);
-      needed[k] = options.obstacles.top(xy.x(), xy.y()) + options.drone_clearance_m;
+      envelope[k] = options.obstacles.top(xy.x(), xy.y()) + options.drone_clearance_m;
     }
-    for (size_t k = 0; k < theta.size(); ++k) {
-      for (size_t j = 0; j < theta.size(); ++j) {
-        if (!std::isfinite(needed[j])) continue;
-        const double dt = std::abs(knots.times_s[k] - knots.times_s[j]);
-        heights[k] = std::max(heights[k], needed[j] - options.drone_climb_rate * dt);
-      }
+    for (size_t k = 1; k < n; ++k) {
+      const double dt = knots.times_s[k] - knots.times_s[k - 1];
+      envelope[k] = std::max(envelope[k], envelope[k - 1] - options.drone_climb_rate * dt);
     }
+    for (size_t k = n - 1; k-- > 0;) {
+      const double dt = knots.times_s[k + 1] - knots.times_s[k];
+      envelope[k] = std::max(envelope[k], envelope[k + 1] - options.drone_climb_rate * dt);
+    }
+    for (size_t k = 0; k < n; ++k) heights[k] = std::max(heights[k], envelope[k]);
   }
   std::vector<Pose> poses;
   for (size_t k = 0; k < theta.size(); ++k) {
@@ -467,8 +472,8 @@ Result<HeightField> HeightField::fromModel(const Model& model, double radius_m, 
   field.height_ = static_cast<int>(std::floor(extent_y / field.cell_)) + 1;
   const float none = -std::numeric_limits<float>::infinity();
   std::vector<float> raw(size_t(field.width_) * field.height_, none);
-  const auto cellOf = [&](double v, double origin, int size) {
-    return std::clamp(static_cast<int>(std::floor((v - origin) / field.cell_)), 0, size - 1);
+  const auto cellOf = [&](double v, double origin, int size) {  // clamped before the cast
+    return static_cast<int>(std::clamp(std::floor((v - origin) / field.cell_), 0.0, double(size - 1)));
   };
   // Each triangle's highest corner over the cells its xy bounding box widened by the radius covers.
   for (size_t t = 0; t < model.triangleCount(); ++t) {
@@ -516,6 +521,11 @@ Result<SplineTrajectory> makeTrajectory(const TrajectoryOptions& options, const 
   }
   if (!isValidPose(options.T_body_camera)) {
     return makeError(ErrorCode::kInvalidArgument, "makeTrajectory: T_body_camera is not a finite rigid transform");
+  }
+  if (!std::isfinite(options.drone_clearance_m) || options.drone_clearance_m < 0.0 ||
+      !std::isfinite(options.drone_climb_rate) || options.drone_climb_rate <= 0.0) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "makeTrajectory: drone_clearance_m must be finite and >= 0, drone_climb_rate finite and > 0");
   }
   // Different kinds draw different streams even for the same seed.
   Mt19937 rnd(options.seed * 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(options.kind) + 1);

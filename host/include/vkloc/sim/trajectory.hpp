@@ -88,7 +88,8 @@ struct TrajectoryOptions {
 
 /// Builds a trajectory that keeps the camera viewing the model inside `scene_bounds` (world
 /// frame, z up), defined on [0, duration] (startNs() == 0). kInvalidArgument for an empty or
-/// non-finite box, a duration outside (0, 10^4] s or an invalid T_body_camera.
+/// non-finite box, a duration outside (0, 10^4] s, an invalid T_body_camera, a negative or
+/// non-finite drone_clearance_m or a non-positive or non-finite drone_climb_rate.
 Result<SplineTrajectory> makeTrajectory(const TrajectoryOptions& options, const Aabb& scene_bounds);
 
 /// Samples the IMU along the trajectory at noise.rate_hz from startNs(): gyro = omega_body + b_g
