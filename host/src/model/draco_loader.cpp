@@ -3,6 +3,7 @@
 #include <draco/compression/decode.h>
 #include <draco/compression/entropy/symbol_decoding.h>
 #include <draco/compression/mesh/mesh_edgebreaker_decoder.h>
+#include <draco/compression/mesh/mesh_sequential_decoder.h>
 #include <draco/core/varint_decoding.h>
 #include <draco/mesh/mesh.h>
 #include <fmt/format.h>
@@ -247,27 +248,26 @@ std::unique_ptr<draco::Mesh> decodeDracoMesh(const uint8_t* data, size_t size, s
     error = "truncated or corrupt Draco header";
     return nullptr;
   }
-  if (header.encoder_method != draco::MESH_EDGEBREAKER_ENCODING) {
-    // Sequential meshes have no connectivity for the texture-coordinate predictors.
-    draco::Decoder decoder;
-    auto mesh = decoder.DecodeMeshFromBuffer(&buffer);
-    if (!mesh.ok()) {
-      error = "cannot decode Draco: " + mesh.status().error_msg_string();
-      return nullptr;
-    }
-    if (!mesh.value()) {
-      error = "cannot decode Draco mesh";
-      return nullptr;
-    }
-    return std::move(mesh).value();
+  // Sequential meshes have no connectivity for the texture-coordinate predictors: Draco's own
+  // decoder; Edgebreaker ones get the orientation-count check.
+  std::unique_ptr<draco::MeshDecoder> decoder;
+  BoundedEdgebreakerDecoder* bounded = nullptr;
+  if (header.encoder_method == draco::MESH_EDGEBREAKER_ENCODING) {
+    auto edgebreaker = std::make_unique<BoundedEdgebreakerDecoder>(&buffer);
+    bounded = edgebreaker.get();
+    decoder = std::move(edgebreaker);
+  } else if (header.encoder_method == draco::MESH_SEQUENTIAL_ENCODING) {
+    decoder = std::make_unique<draco::MeshSequentialDecoder>();
+  } else {
+    error = "cannot decode Draco: unknown encoding method";
+    return nullptr;
   }
-  BoundedEdgebreakerDecoder decoder(&buffer);
   auto mesh = std::make_unique<draco::Mesh>();
   const draco::DecoderOptions options;
-  const draco::Status status = decoder.Decode(options, &buffer, mesh.get());
-  if (!decoder.refusal().empty()) {
-    unsupported = decoder.refusalUnsupported();
-    error = (unsupported ? "Draco stream: " : "corrupt Draco stream: ") + decoder.refusal();
+  const draco::Status status = decoder->Decode(options, &buffer, mesh.get());
+  if (bounded && !bounded->refusal().empty()) {
+    unsupported = bounded->refusalUnsupported();
+    error = (unsupported ? "Draco stream: " : "corrupt Draco stream: ") + bounded->refusal();
     return nullptr;
   }
   if (!status.ok()) {

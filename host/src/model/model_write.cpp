@@ -327,8 +327,10 @@ bool quantizedTriangleWithArea(const std::vector<float>& positions, const std::v
                  std::numeric_limits<float>::max()};
   float hi[3] = {std::numeric_limits<float>::lowest(), std::numeric_limits<float>::lowest(),
                  std::numeric_limits<float>::lowest()};
-  for (size_t i = 0; i < positions.size(); ++i) lo[i % 3] = std::min(lo[i % 3], positions[i]);
-  for (size_t i = 0; i < positions.size(); ++i) hi[i % 3] = std::max(hi[i % 3], positions[i]);
+  for (size_t i = 0; i < positions.size(); ++i) {
+    lo[i % 3] = std::min(lo[i % 3], positions[i]);
+    hi[i % 3] = std::max(hi[i % 3], positions[i]);
+  }
   float range = 0.0f;
   for (int k = 0; k < 3; ++k) range = std::max(range, hi[k] - lo[k]);
   if (!std::isfinite(range)) return true;  // refused by encodeDraco's range check, with its reason
