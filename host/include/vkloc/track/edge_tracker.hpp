@@ -112,7 +112,7 @@ struct EdgeTrackerOptions {
   /// at 1.4 m with fx = 700).
   double min_step = 1e-5;
   /// Stop a level when an accepted step lowers the robust cost by less than this fraction.
-  double min_cost_decrease = 1e-5;
+  double min_cost_decrease = 1e-3;
   double initial_damping = 1e-4;     ///< Levenberg damping (relative to diag(H)) after a rejected step.
   double max_damping = 1e4;          ///< Give up a level when the damping exceeds this.
   double inlier_threshold_px = 1.5;  ///< A valid residual below this (finest level pixels) is an inlier.
