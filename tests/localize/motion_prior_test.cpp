@@ -336,5 +336,21 @@ TEST(EkfPrior, WithoutReadingsItIsTheConstantVelocityPrior) {
   EXPECT_FALSE(prior.bridge(3 * kFrameNs, a, poseAt(5, 0)).has_value());
 }
 
+// A refused pose counts against the prior when it verifies confidently, or above every one of
+// the last poses the prior took (imagery whose true poses verify poorly: room hard's 0.2-0.3).
+TEST(PriorRestart, ARefusedPoseCountsWhenConfidentOrBetterThanWhatThePriorTook) {
+  const std::vector<double> poor = {0.22, 0.17, 0.11, 0.08, 0.04};
+  EXPECT_TRUE(refusalCountsAgainstPrior(0.24, poor, 5, 0.5, 0.15));
+  EXPECT_FALSE(refusalCountsAgainstPrior(0.21, poor, 5, 0.5, 0.15));                       // below the best taken
+  EXPECT_FALSE(refusalCountsAgainstPrior(0.22, poor, 5, 0.5, 0.15));                       // equal is not above
+  EXPECT_FALSE(refusalCountsAgainstPrior(0.12, {0.1, 0.1, 0.1, 0.1, 0.1}, 5, 0.5, 0.15));  // not verified
+  EXPECT_TRUE(refusalCountsAgainstPrior(0.6, {0.9, 0.9, 0.9, 0.9, 0.9}, 5, 0.5, 0.15));    // confident
+  // Only the last `window` poses are compared; fewer than that: only the confident bar applies.
+  EXPECT_TRUE(refusalCountsAgainstPrior(0.3, {0.9, 0.2, 0.2, 0.2, 0.2, 0.2}, 5, 0.5, 0.15));
+  EXPECT_FALSE(refusalCountsAgainstPrior(0.3, {0.2, 0.2}, 5, 0.5, 0.15));
+  EXPECT_FALSE(refusalCountsAgainstPrior(0.3, poor, 0, 0.5, 0.15));
+  EXPECT_FALSE(refusalCountsAgainstPrior(std::nan(""), poor, 5, 0.5, 0.15));
+}
+
 }  // namespace
 }  // namespace vkloc

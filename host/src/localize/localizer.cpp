@@ -218,7 +218,16 @@ struct Localizer::Impl {
     int64_t t_ns = 0;
     Pose T_world_camera = Pose::Identity();
     bool restarted = false;  ///< Restarted, and no pose accepted under its gate since.
+    /// Verification scores of the last kTakenScores poses the prior took (oldest first).
+    std::vector<double> taken_scores;
   } refusals;
+  static constexpr size_t kTakenScores = 5;
+  /// Records the verification score of a pose the motion prior took.
+  void poseTaken(double score) {
+    std::vector<double>& s = refusals.taken_scores;
+    if (s.size() == kTakenScores) s.erase(s.begin());
+    s.push_back(score);
+  }
   int search_level = 0;  ///< This frame's alignment starts at least this deep (searchLevel).
 
   // Relocalization and global initialization (RelocalizationOptions).
@@ -714,6 +723,7 @@ struct Localizer::Impl {
     out.scene_depth_m = keyframe.scene_depth_m;
     out.reference_points = static_cast<int>(keyframe.reference.points.size());
     out.verify_score = verificationScore(verificationFeatures(track, keyframe.scene_depth_m), options.verification);
+    poseTaken(out.verify_score);
     out.keyframe_id = keyframe.id;
     out.keyframe_age_frames = frame_index - keyframe.request.frame_index;
   }
@@ -1207,9 +1217,12 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // A prior that refuses confidently verified poses frame after frame is the one that is wrong
   // (a velocity taken from a poor first fix, a bias): after restart_after_refusals of them in a
   // row it restarts at this pose with the velocity of the last two.
+  // A refused pose counts when it verifies with restart_min_score, or above every one of the last
+  // poses the prior took (refusalCountsAgainstPrior).
   bool restart = false;
   std::optional<Eigen::Vector3d> restart_velocity;
-  if (out.visual_rejected && out.verify_score >= m.options.restart_min_score) {
+  if (out.visual_rejected && refusalCountsAgainstPrior(out.verify_score, m.refusals.taken_scores, Impl::kTakenScores,
+                                                       m.options.restart_min_score, m.options.verification.min_score)) {
     if (m.refusals.count > 0 && t_ns > m.refusals.t_ns &&
         static_cast<double>(t_ns - m.refusals.t_ns) * 1e-9 <= m.options.motion_search_max_gap_s) {
       ++m.refusals.count;
@@ -1227,6 +1240,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   if (restart) {
     m.motion->reset(track.T_world_camera, restart_velocity);
     m.refusals.count = 0;
+    m.refusals.taken_scores.clear();
     m.refusals.restarted = true;
     out.visual_rejected = false;
     out.prior_restarted = true;
@@ -1239,6 +1253,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     if (!out.prior_restarted && prediction && prediction->inertial) m.refusals.restarted = false;
     m.motion->setSceneDepth(keyframe.scene_depth_m);
     m.motion->addVisualPose(t_ns, track.T_world_camera, track.covariance);
+    m.poseTaken(out.verify_score);
     m.keyframes->frameTracked(track.quality);
     m.tracked_since_reset = true;
     // Kept for the motion search of the next frames (image shift from the last tracked frame).

@@ -1,5 +1,6 @@
 #include "vkloc/localize/motion_prior.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "vkloc/core/numeric.hpp"
@@ -364,6 +365,15 @@ std::optional<Pose> ViewPrior::lastPose() const {
   std::optional<Pose> p = prior_->lastPose();
   if (p) p = toView(*p);
   return p;
+}
+
+bool refusalCountsAgainstPrior(double score, const std::vector<double>& taken_scores, size_t window,
+                               double restart_min_score, double min_score) {
+  if (score >= restart_min_score) return true;
+  if (!(score >= min_score)) return false;  // NaN counts for nothing
+  if (window == 0 || taken_scores.size() < window) return false;
+  return std::all_of(taken_scores.end() - static_cast<std::ptrdiff_t>(window), taken_scores.end(),
+                     [score](double taken) { return score > taken; });
 }
 
 }  // namespace vkloc

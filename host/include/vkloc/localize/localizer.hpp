@@ -185,8 +185,9 @@ struct LocalizerOptions {
   double motion_search_confident_score = 0.5;
   /// Restart of the motion prior: after this many poses in a row (at most motion_search_max_gap_s
   /// apart) that the prior's gate refused although their verification score was at least
-  /// restart_min_score, the prior restarts at the last of them with the velocity between the last
-  /// two (Localizer result prior_restarted). 0 = never.
+  /// restart_min_score, or at least verification.min_score and above the scores of each of the
+  /// last five poses the prior took (refusalCountsAgainstPrior), the prior restarts at the last of
+  /// them with the velocity between the last two (Localizer result prior_restarted). 0 = never.
   int restart_after_refusals = 2;
   double restart_min_score = 0.5;
   /// With kAuto and an Accelerator: time the CPU and device live stages + alignment on the

@@ -293,4 +293,13 @@ class EkfPrior final : public MotionPrior {
   mutable double last_innovation_ = std::numeric_limits<double>::quiet_NaN();
 };
 
+/// Whether a pose the motion prior's gate refused counts against the prior
+/// (LocalizerOptions::restart_after_refusals): it verifies with `restart_min_score`, or, on
+/// imagery whose true poses never verify that well, it verifies (>= `min_score`) above every one
+/// of the last `window` poses the prior took (`taken_scores`, oldest first; fewer than `window`:
+/// this part does not apply): a prior that took poorly verified poses drifted with them and now
+/// refuses better ones. Scores are verificationScore values (0..1).
+bool refusalCountsAgainstPrior(double score, const std::vector<double>& taken_scores, size_t window,
+                               double restart_min_score, double min_score);
+
 }  // namespace vkloc
