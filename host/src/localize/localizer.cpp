@@ -212,7 +212,8 @@ struct Localizer::Impl {
   bool tracked_since_reset = false;  ///< A frame was tracked since create/reset.
   /// The last frame whose pose was tracked and accepted: its image, pose and time.
   std::optional<TrackedImage> last_tracked_gray;
-  /// Consecutive confidently verified poses the motion prior refused, the last one's time and pose.
+  /// Consecutive poses the motion prior refused that count against it (refusalCountsAgainstPrior),
+  /// the last one's time and pose.
   struct Refusals {
     int count = 0;
     int64_t t_ns = 0;
@@ -1214,11 +1215,10 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
       out.innovation = m.motion->lastInnovation();
     }
   }
-  // A prior that refuses confidently verified poses frame after frame is the one that is wrong
-  // (a velocity taken from a poor first fix, a bias): after restart_after_refusals of them in a
-  // row it restarts at this pose with the velocity of the last two.
-  // A refused pose counts when it verifies with restart_min_score, or above every one of the last
-  // poses the prior took (refusalCountsAgainstPrior).
+  // A prior that refuses well verified poses frame after frame is the one that is wrong (a
+  // velocity taken from a poor first fix, a bias, poorly verified poses it took): after
+  // restart_after_refusals of them in a row (refusalCountsAgainstPrior) it restarts at this pose
+  // with the velocity of the last two.
   bool restart = false;
   std::optional<Eigen::Vector3d> restart_velocity;
   if (out.visual_rejected && refusalCountsAgainstPrior(out.verify_score, m.refusals.taken_scores, Impl::kTakenScores,
