@@ -27,8 +27,11 @@ TEST(ConstantVelocityPrior, ExtrapolatesTheLastMotion) {
   prior.reset(poseAt(0, 0));
   ASSERT_TRUE(prior.predict(kFrameNs).has_value());
   EXPECT_TRUE(prior.predict(kFrameNs)->T_world_camera.isApprox(poseAt(0, 0)));  // no motion known yet
+  EXPECT_TRUE(prior.predict(kFrameNs)->velocity_unobserved);
   prior.addVisualPose(0, poseAt(0, 0), Matrix6d::Identity());
+  EXPECT_TRUE(prior.predict(kFrameNs)->velocity_unobserved);  // one pose: still no motion
   prior.addVisualPose(kFrameNs, poseAt(0.1, 2), Matrix6d::Identity());
+  EXPECT_FALSE(prior.predict(2 * kFrameNs)->velocity_unobserved);
   // Twice the interval: twice the motion (a screw motion, here translation + yaw).
   const Pose expected = poseAt(0.1, 2) * expSE3(2.0 * logSE3(poseAt(0, 0).inverse() * poseAt(0.1, 2)));
   const auto p = prior.predict(3 * kFrameNs);
@@ -54,6 +57,7 @@ TEST(ConstantVelocityPrior, StartsInMotionWithTheCallersVelocity) {
   const Pose guess = prior.predict(2 * kFrameNs)->T_world_camera;
   EXPECT_TRUE(guess.translation().isApprox(poseAt(0, 0).translation() + 0.05 * v, 1e-12));
   EXPECT_TRUE(guess.linear().isApprox(poseAt(0, 0).linear()));
+  EXPECT_FALSE(prior.predict(2 * kFrameNs)->velocity_unobserved);  // the caller's velocity
   // Two timed poses: their motion takes over.
   prior.addVisualPose(2 * kFrameNs, poseAt(0.1, 2), Matrix6d::Identity());
   const Pose expected = poseAt(0.1, 2) * expSE3(logSE3(poseAt(0, 0).inverse() * poseAt(0.1, 2)));

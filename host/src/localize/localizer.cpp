@@ -245,7 +245,12 @@ struct Localizer::Impl {
 
   /// Pyramid level whose basin covers the prediction's uncertainty (LocalizerOptions::max_search_level).
   int searchLevel(const std::optional<MotionPrediction>& prediction, double scene_depth_m) const {
-    if (!prediction || !prediction->inertial || options.max_search_level <= 0) return 0;
+    if (!prediction || options.max_search_level <= 0) return 0;
+    const int deepest = std::min(options.max_search_level, options.live.levels - 1);
+    // Without the IMU (or before its first reading) the first frame after a start has no motion
+    // to extrapolate and no covariance to size the search by: it starts at the deepest level, as
+    // an inertial start at an unknown velocity does.
+    if (!prediction->inertial) return prediction->velocity_unobserved && tracked_since_reset ? deepest : 0;
     const Matrix6d& C = prediction->covariance;
     const double sigma_t = std::sqrt(std::max({C(0, 0), C(1, 1), 0.0}));  // across the view, m
     const double sigma_r = std::sqrt(std::max({C(3, 3), C(4, 4), 0.0}));  // about x and y, rad
@@ -254,7 +259,7 @@ struct Localizer::Impl {
     const double ratio = options.search_sigmas * sigma_px / options.search_basin_px;
     if (!(ratio > 1.0)) return 0;
     const int level = static_cast<int>(std::ceil(std::log2(ratio)));
-    return std::clamp(level, 0, std::min(options.max_search_level, options.live.levels - 1));
+    return std::clamp(level, 0, deepest);
   }
   bool live_ready = false;   ///< The active backend holds the current image's live frame.
   uint64_t uploaded_id = 0;  ///< Id of the keyframe the backends hold (setKeyframe; 0: none).
@@ -830,7 +835,9 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
     const int deepest = std::max(t.coarsest_level, t.far_first_depth_quantile > 0 ? t.far_first_coarsest_level : 0);
     impl->options.live.levels = std::min(options.live.levels, std::max(deepest, t.finest_level) + 1);
   }
-  if (options.inertial.enabled && options.inertial.filter == InertialFilter::kEkf && options.max_search_level > 0) {
+  // The deepest search level is built whenever the search can start there: the EKF's uncertain
+  // predictions, and without a covariance the first frame after a start (searchLevel).
+  if (options.max_search_level > 0) {
     impl->options.live.levels = std::max(impl->options.live.levels, std::min(8, options.max_search_level + 1));
   }
   impl->options.reference.levels = impl->options.live.levels;

@@ -52,7 +52,11 @@ std::optional<MotionPrediction> ConstantVelocityPrior::predict(int64_t t_ns) con
     if (dt > 0 && dt <= 1.0) p.T_world_camera.translation() += dt * *initial_velocity_;
     return p;
   }
-  if (!prev_pose_ || last_pose_t_ns_ <= prev_pose_t_ns_) return p;
+  if (!prev_pose_) {
+    p.velocity_unobserved = !initial_velocity_;
+    return p;
+  }
+  if (last_pose_t_ns_ <= prev_pose_t_ns_) return p;
   // Constant velocity: the last inter-frame motion (camera frame) scaled to the time step.
   const Vector6d xi = logSE3(prev_pose_->inverse() * *last_pose_);
   const double scale =

@@ -155,8 +155,10 @@ struct LocalizerOptions {
   /// frame's alignment starts at the pyramid level where search_sigmas x the predicted 1-sigma
   /// image displacement (translation across the view at the keyframe's median depth, and
   /// rotation) is at most search_basin_px pixels of that level, up to max_search_level (the live
-  /// pyramid is built that deep when the filter runs; 0 = never deeper than the tracker's own
-  /// coarsest levels). A start with an unknown velocity thus searches coarse, a settled filter fine.
+  /// pyramid is built that deep; 0 = never deeper than the tracker's own coarsest levels). A start
+  /// with an unknown velocity thus searches coarse, a settled filter fine. Without a covariance
+  /// (no IMU, or before its first reading) the first frame after a start, whose motion is unknown
+  /// (MotionPrediction::velocity_unobserved), starts at max_search_level.
   int max_search_level = 2;
   double search_sigmas = 3.0;
   double search_basin_px = 6.0;

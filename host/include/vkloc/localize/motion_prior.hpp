@@ -86,6 +86,8 @@ struct MotionPrediction {
   Matrix6d covariance = Matrix6d::Zero();
   /// kEkf: the filter started at an unknown velocity that no second pose has pinned down yet, so
   /// its gate cannot tell a wrong pose from a right one (the velocity's sigma admits both).
+  /// Constant-velocity model (not inertial): a single pose since the reset and no velocity given,
+  /// so the prediction holds that pose whatever the camera does.
   bool velocity_unobserved = false;
 };
 
