@@ -225,6 +225,12 @@ void run(const TrackArgs& a) {
   // truncates the previous trajectory and log, and keeps what it tracked.
   auto traj = take(PartialFileWriter::open(a.out));
   auto frames = take(PartialFileWriter::open(frames_path));
+  // The alignments' own poses of the tracked frames, beside the trajectory (which has the
+  // filter's estimates where --frame-pose filter and the EKF run).
+  const std::string visual_path = (out_path.parent_path() / (out_path.stem().string() + "_visual.txt")).string();
+  auto visual = take(PartialFileWriter::open(visual_path));
+  check(visual->appendLine(
+      "# vkloc track: the alignment's T_world_camera of each tracked frame, TUM format: t tx ty tz qx qy qz qw"));
   check(traj->appendLine(
       "# vkloc track: T_world_camera, TUM format: t tx ty tz qx qy qz qw (lost frames are not listed; inertial-only "
       "ones are)"));
@@ -233,7 +239,7 @@ void run(const TrackArgs& a) {
       "rerendered,visible_ratio,spread_ratio,chance_inlier_ratio,scale_px,keyframe_id,keyframe_age_frames,"
       "keyframe_adopted,visual_rejected,ekf_nis,inertial_sigma_m,verify_score,search_level,"
       "search_probes,image_shift_px,prior_restarted,relocalization_candidates,search_radius_m,relocalization_ms,"
-      "front_ms,view_tilt_deg,image_content,image_contrast"));
+      "front_ms,view_tilt_deg,image_content,image_contrast,pose_filtered"));
   // The filter's output at the IMU rate (kEkf): camera pose, body velocity, 1-sigma figures.
   const std::string filter_path = (out_path.parent_path() / (out_path.stem().string() + "_filter.csv")).string();
   auto filter_out = take(PartialFileWriter::open(filter_path));
@@ -242,7 +248,8 @@ void run(const TrackArgs& a) {
   std::vector<FilterOutput> filter_outputs;
   const bool tty = isatty(fileno(stdout)) != 0 && !a.quiet;
   size_t last_decile = 0;
-  std::vector<StampedPose> estimate;
+  std::vector<StampedPose> estimate, visual_estimate;
+  size_t filtered = 0;  // tracked frames that report the filter's estimate
   std::vector<double> total_ms, depths;
   size_t lost = 0, inertial = 0, rejected = 0, rerendered = 0, lost_after_first = 0, relocalized = 0, initializing = 0,
          no_content = 0;
@@ -299,11 +306,16 @@ void run(const TrackArgs& a) {
       } else if (f.state != TrackingState::kInitializing) {  // frames before a first pose are counted apart
         ++lost;
       }
+      if (tracking) {
+        check(visual->appendLine(fmt::format("{} {}", seconds(entry.t_ns), formatPose(f.T_world_camera_visual))));
+        visual_estimate.push_back({entry.t_ns, f.T_world_camera_visual});
+        filtered += f.pose_filtered;
+      }
       rerendered += f.reference_rendered;
       check(frames->appendLine(fmt::format(
           "{},{},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.4f},{:.4f},{},{},{},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{},{},{:."
           "4g},"
-          "{:.4g},{:.4f},{},{},{:.1f},{},{},{:.4g},{:.1f},{:.3f},{:.2f},{},{:.2f}",
+          "{:.4g},{:.4f},{},{},{:.1f},{},{},{:.4g},{:.1f},{:.3f},{:.2f},{},{:.2f},{}",
           entry.t_ns, trackingStateName(f.state), f.render_ms, f.reference_ms, f.live_ms, f.align_ms, f.total_ms,
           f.quality.inlier_ratio, f.quality.mean_residual_px, f.quality.points_used, f.quality.iterations,
           f.reference_rendered ? 1 : 0, f.quality.visible_ratio, f.quality.spread_ratio, f.quality.chance_inlier_ratio,
@@ -312,7 +324,7 @@ void run(const TrackArgs& a) {
           f.motion_search_probes, f.image_shift_px, f.prior_restarted ? 1 : 0, f.relocalization_candidates,
           f.search_radius_m, f.relocalization_ms, f.front_ms,
           Eigen::AngleAxisd(f.T_camera_view.linear()).angle() * 180.0 / M_PI, imageContentName(f.image_content),
-          f.image_contrast)));
+          f.image_contrast, f.pose_filtered ? 1 : 0)));
       for (const FilterOutput& o : localizer->takeFilterOutputs()) {
         const Eigen::Quaterniond q(o.T_world_camera.linear());
         const Eigen::Vector3d& t = o.T_world_camera.translation();
@@ -355,12 +367,14 @@ void run(const TrackArgs& a) {
     traj->keep();
     frames->keep();
     filter_out->keep();
+    visual->keep();
     throw Failure{fmt::format("{} (the {} frames tracked before are kept in {} and {})", failure.message,
                               frames->lines() - 1, traj->partialPath(), frames->partialPath())};
   }
   check(traj->commit());
   check(frames->commit());
   check(filter_out->commit());
+  check(visual->commit());
   if (overlay) {
     const std::string overlay_line = overlay->finish();
     if (!a.quiet) std::printf("%s\n", overlay_line.c_str());
@@ -409,6 +423,21 @@ void run(const TrackArgs& a) {
         result.translation_m.median, result.translation_m.mean, result.translation_m.max, result.rotation_deg.median,
         result.rotation_deg.mean, result.rotation_deg.max, result.localized_fraction,
         depths.empty() ? 0.0 : result.translation_m.median / median(depths));
+    // The alignments' own poses on the tracked frames (the same as above where no frame reports
+    // the filter's estimate).
+    summary += fmt::format(",\n  \"pose_filtered_frames\": {}", filtered);
+    if (!visual_estimate.empty()) {
+      EvalInput visual_input;
+      visual_input.estimate = visual_estimate;
+      visual_input.groundtruth = seq.groundtruth;
+      Result<EvalResult> v = evaluateTrajectory(visual_input);
+      if (v.ok()) {
+        summary += fmt::format(
+            ",\n  \"visual_translation_median_m\": {:.9g},\n  \"visual_translation_max_m\": {:.9g},\n"
+            "  \"visual_rotation_median_deg\": {:.9g},\n  \"visual_rotation_max_deg\": {:.9g}",
+            v->translation_m.median, v->translation_m.max, v->rotation_deg.median, v->rotation_deg.max);
+      }
+    }
     if (!filter_outputs.empty()) {
       const FilterErrors fe = filterErrors(filter_outputs, seq.groundtruth);
       const double span_s = static_cast<double>(filter_outputs.back().t_ns - filter_outputs.front().t_ns) * 1e-9;
@@ -448,7 +477,7 @@ void run(const TrackArgs& a) {
         "not aligned or searched, bridged by the IMU where it runs\n",
         no_content);
   }
-  std::printf("wrote %s and %s\n", a.out.c_str(), frames_path.c_str());
+  std::printf("wrote %s, %s and %s\n", a.out.c_str(), frames_path.c_str(), visual_path.c_str());
 }
 
 void addTrackOptions(CLI::App* cmd, const std::shared_ptr<TrackArgs>& args) {

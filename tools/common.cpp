@@ -166,6 +166,11 @@ void LocalizerArgs::add(CLI::App& app) {
                  "Factor on the alignment's covariance in the filter (its calibration)")
       ->check(CLI::Range(1e-3, 1e6))
       ->capture_default_str();
+  app.add_option("--frame-pose", frame_pose,
+                 "Pose of a tracked frame: filter (the EKF's estimate after taking the alignment) | visual (the "
+                 "alignment's own)")
+      ->check(CLI::IsMember({"filter", "visual"}))
+      ->capture_default_str();
   app.add_option("--backend", backend, "Live edges + alignment: auto | vulkan | cpu")
       ->check(CLI::IsMember({"auto", "vulkan", "cpu"}))
       ->capture_default_str();
@@ -185,6 +190,7 @@ void LocalizerArgs::apply(LocalizerOptions& options) const {
   options.inertial.filter = filter == "window" ? InertialFilter::kWindowFit : InertialFilter::kEkf;
   options.max_search_level = max_search_level;
   options.inertial.ekf.measurement_covariance_scale = visual_covariance_scale;
+  options.report_filtered_pose = frame_pose == "filter";
 }
 
 std::vector<std::string> LocalizerArgs::arguments() const {
@@ -199,7 +205,9 @@ std::vector<std::string> LocalizerArgs::arguments() const {
           "--max-search-level",
           std::to_string(max_search_level),
           "--visual-covariance-scale",
-          fmt::format("{:g}", visual_covariance_scale)};
+          fmt::format("{:g}", visual_covariance_scale),
+          "--frame-pose",
+          frame_pose};
 }
 
 void DeviceArgs::add(CLI::App& app) {

@@ -60,6 +60,67 @@ TEST(Localizer, SynchronousModeTracksAndIsDeterministic) {
   EXPECT_EQ(runs[0][0].keyframe_age_frames, 0);
 }
 
+// With the EKF a tracked frame reports the filter's estimate after the update, and the
+// alignment's pose beside it; reporting one or the other changes nothing else (synchronous mode:
+// the alignments are bit for bit the same).
+TEST(Localizer, WithTheEkfATrackedFrameReportsTheFiltersEstimate) {
+  // The camera circles the box at 10 deg/s looking at a point on the world z axis: it turns about
+  // z at that rate, and accelerates towards the axis (ideal IMU at 200 Hz, body = camera).
+  const double w = 0.5 * M_PI / 180.0 / (static_cast<double>(kFrameNs) * 1e-9);  // rad/s
+  const Eigen::Vector3d g_world(0, 0, -9.81);
+  auto imuAt = [&](int64_t t_ns) {
+    const double t = static_cast<double>(t_ns) * 1e-9, a = -0.9 + w * t;
+    const Eigen::Matrix3d R_world_camera =
+        test::cameraLookingAt({2.0 * std::cos(a), 2.0 * std::sin(a), 1.2}, {0.0, 0.0, 0.15}).linear();
+    const Eigen::Vector3d acc_world = -w * w * Eigen::Vector3d(2.0 * std::cos(a), 2.0 * std::sin(a), 0.0);
+    ImuSample s;
+    s.t_ns = t_ns;
+    s.gyro_body = R_world_camera.transpose() * Eigen::Vector3d(0, 0, w);
+    s.accel_body = R_world_camera.transpose() * (acc_world - g_world);
+    return s;
+  };
+  std::vector<LocalizationResult> runs[2];
+  for (int report = 0; report < 2; ++report) {
+    LocalizerOptions options;
+    options.keyframe_threading = KeyframeThreading::kSynchronous;
+    options.inertial.filter = InertialFilter::kEkf;
+    options.inertial.predictor.gravity_world = g_world;
+    options.report_filtered_pose = report == 1;
+    auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
+    ASSERT_TRUE(created.ok()) << created.error().message;
+    Localizer& localizer = *created.value();
+    localizer.reset(test::localizeTruth(0));
+    const auto& images = test::localizeFrames(kFrames);
+    int64_t t_imu = 0;
+    for (int i = 0; i < kFrames; ++i) {
+      for (; t_imu <= i * kFrameNs; t_imu += 5'000'000) ASSERT_TRUE(localizer.addImu(imuAt(t_imu)).ok());
+      auto r = localizer.localize(i * kFrameNs, images[static_cast<size_t>(i)]);
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      runs[report].push_back(*r);
+    }
+  }
+  int filtered = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    const LocalizationResult& visual = runs[0][static_cast<size_t>(i)];
+    const LocalizationResult& fused = runs[1][static_cast<size_t>(i)];
+    EXPECT_EQ(fused.state, TrackingState::kTracking) << i;
+    EXPECT_FALSE(visual.pose_filtered) << i;
+    EXPECT_TRUE(visual.T_world_camera.matrix() == visual.T_world_camera_visual.matrix()) << i;
+    EXPECT_TRUE(fused.T_world_camera_visual.matrix() == visual.T_world_camera.matrix()) << i;
+    filtered += fused.pose_filtered;
+    EXPECT_LT(test::translationError(fused.T_world_camera, test::localizeTruth(i)), 2e-3) << i;
+    EXPECT_LT(test::rotationErrorDeg(fused.T_world_camera, test::localizeTruth(i)), 0.1) << i;
+    if (fused.pose_filtered) {
+      EXPECT_GT(fused.covariance(0, 0), 0.0) << i;
+      EXPECT_TRUE(fused.covariance.allFinite()) << i;
+    } else {
+      EXPECT_TRUE(fused.T_world_camera.matrix() == fused.T_world_camera_visual.matrix()) << i;
+    }
+  }
+  // Every frame once the filter runs (the first starts it, after a reading at its time).
+  EXPECT_GE(filtered, kFrames - 1);
+}
+
 TEST(Localizer, WorkerModeWaitsOnlyForTheFirstKeyframe) {
   auto localizer = makeLocalizer(KeyframeThreading::kWorkerThread);
   ASSERT_TRUE(localizer);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 
 #include "vkloc/core/se3.hpp"
 #include "vkloc/sim/trajectory.hpp"
@@ -320,6 +321,70 @@ TEST(EkfPrior, FramesDeliveredLateAreGatedAndAppliedAtTheirOwnTime) {
       EXPECT_LT((end->T_world_camera.translation() - on_time_end->translation()).norm(), 1e-6);
     }
   }
+}
+
+// The filter's estimate at a frame it took a pose at (LocalizerOptions::report_filtered_pose):
+// the posterior lies between the prediction and the pose, weighed by their covariances, and is
+// closer to the truth than a pose that slid off; priors that do not fuse have none, nor has a
+// frame the filter took no pose at.
+TEST(EkfPrior, FilteredIsThePosteriorAtTheFrameOfAnUpdate) {
+  const Flight f = flight();
+  InertialAiding aiding;
+  aiding.predictor.gravity_world = Eigen::Vector3d(0, 0, -9.81);
+  EkfPrior prior(aiding, MotionModel::kConstantVelocity);
+  const int64_t t0 = f.trajectory.startNs();
+  const TrajectoryState start = f.trajectory.evaluate(t0);
+  prior.reset(start.T_world_body, start.v_world_body);
+  size_t next = 0;
+  auto feed = [&](int64_t t) {
+    for (; next < f.imu.size() && f.imu[next].t_ns <= t; ++next) ASSERT_TRUE(prior.addImu(f.imu[next]).ok());
+  };
+  const Matrix6d visual = Matrix6d::Identity() * 1e-4;  // 1 cm, 10 mrad
+  feed(t0);
+  EXPECT_FALSE(prior.filtered(t0).has_value());  // no filter before the first pose
+  prior.addVisualPose(t0, start.T_world_body, visual);
+  int64_t t = t0;
+  for (int i = 0; i < 20; ++i) {
+    t += kFrameNs;
+    feed(t);
+    prior.addVisualPose(t, f.trajectory.evaluate(t).T_world_body, visual);
+    ASSERT_TRUE(prior.filtered(t).has_value()) << i;
+  }
+  t += kFrameNs;
+  feed(t);
+  const auto p = prior.predict(t);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_FALSE(prior.filtered(t).has_value());  // no pose taken at t yet
+  const Pose truth = f.trajectory.evaluate(t).T_world_body;
+  Pose slid = truth;
+  slid.translation().x() += 0.03;  // 3 sigma of the pose's own covariance
+  prior.addVisualPose(t, slid, visual);
+  const auto post = prior.filtered(t);
+  ASSERT_TRUE(post.has_value());
+  EXPECT_TRUE(post->inertial);
+  const double x_pred = p->T_world_camera.translation().x(), x_post = post->T_world_camera.translation().x();
+  EXPECT_GT(x_post, std::min(x_pred, slid.translation().x()) - 1e-9);
+  EXPECT_LT(x_post, std::max(x_pred, slid.translation().x()) + 1e-9);
+  EXPECT_LT((post->T_world_camera.translation() - truth.translation()).norm(),
+            0.5 * (slid.translation() - truth.translation()).norm());
+  // Tighter than either: the pose (its covariance x the filter's calibration) and the prediction.
+  EXPECT_LT(post->covariance(0, 0), aiding.ekf.measurement_covariance_scale * visual(0, 0));
+  EXPECT_LT(post->covariance(0, 0), p->covariance(0, 0));
+  EXPECT_FALSE(prior.filtered(t - kFrameNs).has_value());  // only the last update's frame
+
+  // Seen through a view turned about the optical centre: the same posterior, in the view.
+  ViewPrior view(std::make_unique<EkfPrior>(prior));
+  Pose T_camera_view = Pose::Identity();
+  T_camera_view.linear() = expSO3(Eigen::Vector3d(0.3, 0, 0));
+  view.setView(T_camera_view);
+  const auto in_view = view.filtered(t);
+  ASSERT_TRUE(in_view.has_value());
+  EXPECT_TRUE(view.toCamera(in_view->T_world_camera).isApprox(post->T_world_camera, 1e-9));
+
+  ConstantVelocityPrior plain;
+  plain.reset(poseAt(0, 0));
+  plain.addVisualPose(kFrameNs, poseAt(0.1, 1), visual);
+  EXPECT_FALSE(plain.filtered(kFrameNs).has_value());
 }
 
 // Without IMU readings the EKF prior is the constant-velocity prior.

@@ -27,7 +27,7 @@ endif()
 file(STRINGS ${WORK}/gi/traj_frames.csv rows)
 list(GET rows 0 header)
 list(GET rows 1 first)
-if(NOT header MATCHES "relocalization_candidates,search_radius_m,relocalization_ms,front_ms,view_tilt_deg,image_content,image_contrast$" OR NOT first MATCHES
+if(NOT header MATCHES "relocalization_candidates,search_radius_m,relocalization_ms,front_ms,view_tilt_deg,image_content,image_contrast,pose_filtered$" OR NOT first MATCHES
                                                                                          "^[0-9]+,relocalized,")
   message(FATAL_ERROR "frames log: header '${header}', first frame '${first}'")
 endif()

@@ -62,7 +62,7 @@ check_outputs() {
     case "$f" in
       *.tmp-[0-9]*-[0-9]*) temporaries=$((temporaries + 1)) ;;
       *.csv.partial | *.csv) check_csv "$f" ;;
-      *traj.txt.partial | *traj.txt | */groundtruth.txt) check_tum "$f" ;;
+      *traj.txt.partial | *traj.txt | *traj_visual.txt.partial | *traj_visual.txt | */groundtruth.txt) check_tum "$f" ;;
       *.partial) whole_lines "$f" || fail "$f: ends inside a line" ;;
       *.png | *.jpg) check_image "$f" ;;
       *.glb) "$VKLOC" info --model "$f" >/dev/null 2>&1 || fail "$f: model does not load" ;;

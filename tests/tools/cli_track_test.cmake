@@ -17,11 +17,18 @@ list(GET rows 0 header)
 if(NOT n EQUAL 7 OR NOT header MATCHES "^t_ns,state,render_ms,reference_ms,live_ms,align_ms,total_ms,inlier_ratio")
   message(FATAL_ERROR "frames.csv: ${n} lines, header '${header}'")
 endif()
-foreach(f out/traj_report/report.html out/traj_report/report.json out/traj_report/track.json)
+foreach(f out/traj_report/report.html out/traj_report/report.json out/traj_report/track.json out/traj_visual.txt)
   if(NOT EXISTS ${WORK}/${f})
     message(FATAL_ERROR "missing ${WORK}/${f}")
   endif()
 endforeach()
+# The alignments' own poses beside the trajectory: one per tracked frame (here, without an IMU,
+# the trajectory's own).
+file(STRINGS ${WORK}/out/traj_visual.txt visual_poses REGEX "^[0-9]")
+file(STRINGS ${WORK}/out/traj.txt poses REGEX "^[0-9]")
+if(NOT visual_poses STREQUAL poses)
+  message(FATAL_ERROR "traj_visual.txt differs from traj.txt without a filter:\n${visual_poses}\n${poses}")
+endif()
 # The evaluation reads the written files back.
 run_ok("eval" eval --estimate ${WORK}/out/traj.txt --sequence ${seq} --frames ${WORK}/out/frames.csv)
 

@@ -1032,7 +1032,11 @@ const CameraFront* Localizer::cameraFront() const { return impl_->front.get(); }
 Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& image,
                                                const std::optional<Pose>& T_world_camera_guess) {
   Impl& m = *impl_;
-  if (!m.front) return localizeView(t_ns, image, T_world_camera_guess);
+  if (!m.front) {
+    Result<LocalizationResult> result = localizeView(t_ns, image, T_world_camera_guess);
+    if (result.ok() && !result->pose_filtered) result->T_world_camera_visual = result->T_world_camera;
+    return result;
+  }
   const auto t_start = SteadyClock::now();
   if (T_world_camera_guess && !isValidPose(*T_world_camera_guess)) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: the pose guess is not a finite rigid transform");
@@ -1058,8 +1062,10 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& imag
   Result<LocalizationResult> result = localizeView(t_ns, m.view_image, guess_view);
   if (!result.ok()) return result;
   LocalizationResult out = std::move(result).value();
+  if (!out.pose_filtered) out.T_world_camera_visual = out.T_world_camera;
   out.T_camera_view = T_camera_view;
   out.T_world_camera = m.view_prior->toCamera(out.T_world_camera);
+  out.T_world_camera_visual = m.view_prior->toCamera(out.T_world_camera_visual);
   out.covariance = m.view_prior->covarianceToCamera(out.covariance);
   out.front_ms = front_ms;
   out.total_ms += front_ms;
@@ -1260,6 +1266,14 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     if (!out.prior_restarted && prediction && prediction->inertial) m.refusals.restarted = false;
     m.motion->setSceneDepth(keyframe.scene_depth_m);
     m.motion->addVisualPose(t_ns, track.T_world_camera, track.covariance);
+    if (m.options.report_filtered_pose) {
+      if (std::optional<MotionPrediction> posterior = m.motion->filtered(t_ns)) {
+        out.T_world_camera_visual = out.T_world_camera;
+        out.T_world_camera = posterior->T_world_camera;
+        out.covariance = posterior->covariance;
+        out.pose_filtered = true;
+      }
+    }
     m.poseTaken(out.verify_score);
     m.keyframes->frameTracked(track.quality);
     m.tracked_since_reset = true;

@@ -196,21 +196,24 @@ Status EkfPrior::addImu(const ImuSample& sample) {
   return status;
 }
 
+std::optional<MotionPrediction> EkfPrior::filterAt(int64_t t_ns) const {
+  Result<EkfPrediction> p = ekf_.predict(t_ns);
+  if (!p.ok()) return std::nullopt;
+  MotionPrediction out;
+  out.t_ns = t_ns;
+  out.T_world_camera = p->T_world_camera;
+  out.inertial = true;
+  out.covariance = p->covariance_camera;
+  // Largest position sigma (the translation block is in the camera frame: its trace bounds it).
+  out.sigma_m = std::sqrt(std::max(0.0, p->covariance_camera.topLeftCorner<3, 3>().trace()));
+  out.velocity_unobserved = velocity_unobserved_;
+  return out;
+}
+
 std::optional<MotionPrediction> EkfPrior::predict(int64_t t_ns) const {
   if (aiding_.enabled && ekf_.initialized() &&
       static_cast<double>(t_ns - last_update_t_ns_) * 1e-9 <= aiding_.max_inertial_s) {
-    Result<EkfPrediction> p = ekf_.predict(t_ns);
-    if (p.ok()) {
-      MotionPrediction out;
-      out.t_ns = t_ns;
-      out.T_world_camera = p->T_world_camera;
-      out.inertial = true;
-      out.covariance = p->covariance_camera;
-      // Largest position sigma (the translation block is in the camera frame: its trace bounds it).
-      out.sigma_m = std::sqrt(std::max(0.0, p->covariance_camera.topLeftCorner<3, 3>().trace()));
-      out.velocity_unobserved = velocity_unobserved_;
-      return out;
-    }
+    if (std::optional<MotionPrediction> p = filterAt(t_ns)) return p;
   }
   return motion_.predict(t_ns);
 }
@@ -240,6 +243,7 @@ bool EkfPrior::consistent(const MotionPrediction& prediction, const Pose& T_worl
 
 void EkfPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Matrix6d& covariance) {
   motion_.addVisualPose(t_ns, T_world_camera, covariance);
+  updated_t_ns_.reset();
   if (!aiding_.enabled || !has_imu_) return;
   last_update_t_ns_ = t_ns;
   if (!ekf_.initialized()) {
@@ -259,7 +263,7 @@ void EkfPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Mat
     const Eigen::Vector3d v_body = start_velocity_ ? *start_velocity_ : Eigen::Vector3d::Zero();
     if (!ekf_.initializeFromCamera(t_ns, T_world_camera, v_body, P0).ok()) return;
     // The start pose is itself a measurement (its covariance tightens the initial sigmas).
-    (void)ekf_.updateCameraPose(t_ns, T_world_camera, covariance, EkfGate::kForceAccept);
+    if (ekf_.updateCameraPose(t_ns, T_world_camera, covariance, EkfGate::kForceAccept).ok()) updated_t_ns_ = t_ns;
     velocity_unobserved_ = !start_velocity_;
     return;
   }
@@ -267,7 +271,12 @@ void EkfPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Mat
   // The pose passed consistent()'s gate (or could not be tested): applied as is. A pose older
   // than the newest reading is a delayed update; one newer than the readings cannot be applied.
   const int64_t t_update = std::min(t_ns, ekf_.newestNs());
-  (void)ekf_.updateCameraPose(t_update, T_world_camera, covariance, EkfGate::kForceAccept);
+  if (ekf_.updateCameraPose(t_update, T_world_camera, covariance, EkfGate::kForceAccept).ok()) updated_t_ns_ = t_ns;
+}
+
+std::optional<MotionPrediction> EkfPrior::filtered(int64_t t_ns) const {
+  if (!aiding_.enabled || !ekf_.initialized() || !updated_t_ns_ || *updated_t_ns_ != t_ns) return std::nullopt;
+  return filterAt(t_ns);
 }
 
 std::optional<BridgedPose> EkfPrior::bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
@@ -290,6 +299,7 @@ void EkfPrior::reset(const std::optional<Pose>& T_world_camera, const std::optio
   velocity_unobserved_ = false;
   motion_.reset(T_world_camera, v_world_camera);
   last_update_t_ns_ = 0;
+  updated_t_ns_.reset();
   last_innovation_ = std::numeric_limits<double>::quiet_NaN();
   start_velocity_.reset();
   if (v_world_camera && v_world_camera->allFinite()) start_velocity_ = *v_world_camera;
@@ -363,6 +373,12 @@ std::optional<BridgedPose> ViewPrior::bridge(int64_t t_ns, const std::optional<M
 
 void ViewPrior::reset(const std::optional<Pose>& T_world_view, const std::optional<Eigen::Vector3d>& v_world) {
   prior_->reset(T_world_view ? std::optional<Pose>(toCamera(*T_world_view)) : std::nullopt, v_world);
+}
+
+std::optional<MotionPrediction> ViewPrior::filtered(int64_t t_ns) const {
+  std::optional<MotionPrediction> p = prior_->filtered(t_ns);
+  if (p) p = toView(*p);
+  return p;
 }
 
 std::optional<Pose> ViewPrior::lastPose() const {

@@ -195,6 +195,14 @@ struct LocalizerOptions {
   /// With kAuto and an Accelerator: time the CPU and device live stages + alignment on the
   /// first frame and keep the faster one (instead of deciding by the device type alone).
   bool calibrate_backend = false;
+  /// With a prior that fuses the visual poses with the IMU (InertialFilter::kEkf), a tracked
+  /// frame reports the filter's estimate at the frame's time after it took the frame's pose (its
+  /// posterior: LocalizationResult::pose_filtered), the alignment's own pose in
+  /// LocalizationResult::T_world_camera_visual; false reports the alignment's pose. The filter
+  /// weighs each alignment against the IMU's propagation: an alignment that slid along an
+  /// ambiguity (rotation against translation across the view, a poorly verified fit) moves the
+  /// estimate by what its covariance allows, not all the way.
+  bool report_filtered_pose = true;
   /// Relocalization and global initialization (used only when a keyframe database is given).
   RelocalizationOptions relocalization;
   /// Frames with nothing to align (checkImageContent; min_contrast 0 = check off): no alignment,
@@ -209,6 +217,11 @@ struct LocalizationResult {
   Pose T_world_camera = Pose::Identity();  ///< Estimated pose (not trusted when lost).
   /// Covariance of xi (m^2, rad^2, [rho; phi], live camera frame; see TrackResult::covariance).
   Matrix6d covariance = Matrix6d::Zero();
+  /// T_world_camera and covariance are the filter's posterior at the frame's time
+  /// (LocalizerOptions::report_filtered_pose), and T_world_camera_visual the pose the frame's
+  /// alignment found and the filter took. Otherwise T_world_camera_visual is T_world_camera.
+  bool pose_filtered = false;
+  Pose T_world_camera_visual = Pose::Identity();
   TrackQuality quality;  ///< Alignment quality on the finest level.
   /// Verification score of the frame's alignment (0..1, track/pose_verification.hpp): at or
   /// above LocalizerOptions::verification.min_score the pose is the true one with the measured

@@ -134,6 +134,11 @@ class MotionPrior {
                      const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt) = 0;
   /// The last trusted (or bridged, or reset) camera pose.
   virtual std::optional<Pose> lastPose() const = 0;
+  /// The prior's estimate of the camera at t_ns when it fuses the visual poses with other
+  /// measurements and took one at t_ns (addVisualPose): the filter's posterior, pose and
+  /// covariance (camera frame). nullopt for priors that do not fuse (constant velocity, the
+  /// window fit: their pose at t_ns is the visual one) and when no pose at t_ns was taken.
+  virtual std::optional<MotionPrediction> filtered(int64_t /*t_ns*/) const { return std::nullopt; }
   /// Squared Mahalanobis distance of the last visual pose checked by consistent() (NaN when the
   /// prior has no covariance to test it with).
   virtual double lastInnovation() const { return std::numeric_limits<double>::quiet_NaN(); }
@@ -166,6 +171,7 @@ class ViewPrior final : public MotionPrior {
   void reset(const std::optional<Pose>& T_world_view,
              const std::optional<Eigen::Vector3d>& v_world = std::nullopt) override;
   std::optional<Pose> lastPose() const override;
+  std::optional<MotionPrediction> filtered(int64_t t_ns) const override;
   double lastInnovation() const override { return prior_->lastInnovation(); }
   std::vector<FilterOutput> takeOutputs() override { return prior_->takeOutputs(); }
   void setSceneDepth(double depth_m) override { prior_->setSceneDepth(depth_m); }
@@ -272,6 +278,9 @@ class EkfPrior final : public MotionPrior {
   void reset(const std::optional<Pose>& T_world_camera,
              const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt) override;
   std::optional<Pose> lastPose() const override { return motion_.lastPose(); }
+  /// The filter's state at t_ns after the update with the pose taken at t_ns (its posterior:
+  /// the visual pose weighed against the IMU propagation by their covariances).
+  std::optional<MotionPrediction> filtered(int64_t t_ns) const override;
   double lastInnovation() const override { return last_innovation_; }
   std::vector<FilterOutput> takeOutputs() override;
   /// An unknown start velocity gets 1-sigma unknown_velocity_depths_per_s x depth (m/s) instead
@@ -284,6 +293,7 @@ class EkfPrior final : public MotionPrior {
   const ErrorStateEkf& filter() const { return ekf_; }
 
  private:
+  std::optional<MotionPrediction> filterAt(int64_t t_ns) const;  ///< The filter's state at t_ns, camera frame.
   InertialAiding aiding_;
   ConstantVelocityPrior motion_;
   ErrorStateEkf ekf_;
@@ -292,6 +302,7 @@ class EkfPrior final : public MotionPrior {
   bool has_imu_ = false;  ///< The filter took a reading since reset (without, the constant-velocity prior runs).
   bool velocity_unobserved_ = false;  ///< Started at an unknown velocity, no update since.
   int64_t last_update_t_ns_ = 0;
+  std::optional<int64_t> updated_t_ns_;  ///< Time of the last pose the filter was updated with (filtered()).
   mutable double last_innovation_ = std::numeric_limits<double>::quiet_NaN();
 };
 
