@@ -63,22 +63,26 @@ TEST(Localizer, SynchronousModeTracksAndIsDeterministic) {
 // With the EKF a tracked frame reports the filter's estimate after the update, and the
 // alignment's pose beside it; reporting one or the other changes nothing else (synchronous mode:
 // the alignments are bit for bit the same).
-TEST(Localizer, WithTheEkfATrackedFrameReportsTheFiltersEstimate) {
-  // The camera circles the box at 10 deg/s looking at a point on the world z axis: it turns about
-  // z at that rate, and accelerates towards the axis (ideal IMU at 200 Hz, body = camera).
+// The ideal IMU (200 Hz, body = camera) of localizeTruth's camera: it circles the box at 10 deg/s
+// looking at a point on the world z axis, so it turns about z at that rate and accelerates
+// towards the axis. World z up, gravity -9.81 m/s^2 along it.
+const Eigen::Vector3d kGravityWorld(0, 0, -9.81);
+ImuSample circlingImuAt(int64_t t_ns) {
   const double w = 0.5 * M_PI / 180.0 / (static_cast<double>(kFrameNs) * 1e-9);  // rad/s
-  const Eigen::Vector3d g_world(0, 0, -9.81);
-  auto imuAt = [&](int64_t t_ns) {
-    const double t = static_cast<double>(t_ns) * 1e-9, a = -0.9 + w * t;
-    const Eigen::Matrix3d R_world_camera =
-        test::cameraLookingAt({2.0 * std::cos(a), 2.0 * std::sin(a), 1.2}, {0.0, 0.0, 0.15}).linear();
-    const Eigen::Vector3d acc_world = -w * w * Eigen::Vector3d(2.0 * std::cos(a), 2.0 * std::sin(a), 0.0);
-    ImuSample s;
-    s.t_ns = t_ns;
-    s.gyro_body = R_world_camera.transpose() * Eigen::Vector3d(0, 0, w);
-    s.accel_body = R_world_camera.transpose() * (acc_world - g_world);
-    return s;
-  };
+  const double t = static_cast<double>(t_ns) * 1e-9, a = -0.9 + w * t;
+  const Eigen::Matrix3d R_world_camera =
+      test::cameraLookingAt({2.0 * std::cos(a), 2.0 * std::sin(a), 1.2}, {0.0, 0.0, 0.15}).linear();
+  const Eigen::Vector3d acc_world = -w * w * Eigen::Vector3d(2.0 * std::cos(a), 2.0 * std::sin(a), 0.0);
+  ImuSample s;
+  s.t_ns = t_ns;
+  s.gyro_body = R_world_camera.transpose() * Eigen::Vector3d(0, 0, w);
+  s.accel_body = R_world_camera.transpose() * (acc_world - kGravityWorld);
+  return s;
+}
+
+TEST(Localizer, WithTheEkfATrackedFrameReportsTheFiltersEstimate) {
+  const Eigen::Vector3d g_world = kGravityWorld;
+  auto imuAt = circlingImuAt;
   std::vector<LocalizationResult> runs[2];
   for (int report = 0; report < 2; ++report) {
     LocalizerOptions options;
@@ -119,6 +123,39 @@ TEST(Localizer, WithTheEkfATrackedFrameReportsTheFiltersEstimate) {
   }
   // Every frame once the filter runs (the first starts it, after a reading at its time).
   EXPECT_GE(filtered, kFrames - 1);
+}
+
+// A filter started at a wrong velocity refuses the true poses; after restart_after_refusals of
+// them, confidently verified, it restarts at the last, and it runs on the IMU from there at once:
+// the next frame's prediction is inertial (before, the restart forgot the readings, and the
+// frames after it were predicted by constant velocity, lost ones neither bridged nor searched).
+TEST(Localizer, ARestartedFilterPredictsFromTheImuAtOnce) {
+  LocalizerOptions options;
+  options.keyframe_threading = KeyframeThreading::kSynchronous;
+  options.inertial.filter = InertialFilter::kEkf;
+  options.inertial.predictor.gravity_world = kGravityWorld;
+  auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
+  ASSERT_TRUE(created.ok()) << created.error().message;
+  Localizer& localizer = *created.value();
+  // 1 m/s across the view, given as known: the filter predicts 5 cm off a frame, and tightly.
+  const Pose T0 = test::localizeTruth(0);
+  localizer.reset(T0, Eigen::Vector3d(T0.linear() * Eigen::Vector3d(1.0, 0, 0)));
+  const auto& images = test::localizeFrames(12);
+  int64_t t_imu = 0;
+  std::optional<int> restarted_at;
+  for (int i = 0; i < 12; ++i) {
+    for (; t_imu <= i * kFrameNs; t_imu += 5'000'000) ASSERT_TRUE(localizer.addImu(circlingImuAt(t_imu)).ok());
+    auto r = localizer.localize(i * kFrameNs, images[static_cast<size_t>(i)]);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    if (r->prior_restarted && !restarted_at) restarted_at = i;
+    if (restarted_at && i > *restarted_at) {
+      EXPECT_GT(r->inertial_sigma_m, 0.0) << i;  // an inertial prediction
+      EXPECT_EQ(r->state, TrackingState::kTracking) << i;
+      EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i)), 3e-3) << i;
+    }
+  }
+  ASSERT_TRUE(restarted_at.has_value());
+  EXPECT_LE(*restarted_at, 4);
 }
 
 TEST(Localizer, WorkerModeWaitsOnlyForTheFirstKeyframe) {

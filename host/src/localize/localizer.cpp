@@ -234,13 +234,13 @@ struct Localizer::Impl {
   // Relocalization and global initialization (RelocalizationOptions).
   std::shared_ptr<const KeyframeDatabase> database;
   uint64_t model_fingerprint = 0;
-  bool searching = false;                        ///< Global initialization in progress (startSearch).
-  std::optional<SearchRegion> search_region;     ///< Its region (nullopt: the whole database).
-  bool relocalizing = false;                     ///< A relocalization search is aligning (no point filter).
-  int untracked = 0;                             ///< Frames in a row not tracked.
-  int failed_searches = 0;                       ///< Searches since the last tracked frame that found nothing.
-  std::optional<int64_t> last_tracked_t_ns;      ///< Time of the last tracked frame.
-  std::optional<ImuSample> last_imu;             ///< Newest IMU reading taken (given again after a relocalized reset).
+  bool searching = false;                     ///< Global initialization in progress (startSearch).
+  std::optional<SearchRegion> search_region;  ///< Its region (nullopt: the whole database).
+  bool relocalizing = false;                  ///< A relocalization search is aligning (no point filter).
+  int untracked = 0;                          ///< Frames in a row not tracked.
+  int failed_searches = 0;                    ///< Searches since the last tracked frame that found nothing.
+  std::optional<int64_t> last_tracked_t_ns;   ///< Time of the last tracked frame.
+  std::optional<ImuSample> last_imu;  ///< Newest IMU reading taken (given again when the prior restarts: restartPrior).
   std::optional<int64_t> last_relocalized_t_ns;  ///< Time of the last relocalized frame.
 
   /// Pyramid level whose basin covers the prediction's uncertainty (LocalizerOptions::max_search_level).
@@ -689,6 +689,16 @@ struct Localizer::Impl {
   /// Takes a relocalized pose; the frame counts as tracked. The motion prior restarts there
   /// (velocity unknown) unless `prediction` is an IMU prediction the pose agrees with (its gate):
   /// a prior that bridged the loss keeps its velocity.
+  /// Restarts the motion prior at a pose of the frame at t_ns, moving at v_world (m/s) or at an
+  /// unknown velocity. The reset forgets the IMU readings and the filter starts at a visual pose
+  /// only after one: the newest reading is given again, so the pose the prior takes next starts
+  /// the filter now. (Without it the frames after the restart would be predicted by constant
+  /// velocity, and lost ones neither bridged nor searched, until a frame is tracked again.)
+  void restartPrior(const Pose& T_world_camera, const std::optional<Eigen::Vector3d>& v_world, int64_t t_ns) {
+    motion->reset(T_world_camera, v_world);
+    if (last_imu && last_imu->t_ns <= t_ns) (void)motion->addImu(*last_imu);
+  }
+
   void adoptRelocalized(const TrackResult& track, int64_t t_ns, const ImageU8& gray,
                         const std::optional<MotionPrediction>& prediction, std::optional<int64_t> previous_t_ns,
                         LocalizationResult& out) {
@@ -704,9 +714,7 @@ struct Localizer::Impl {
         v_world = (track.T_world_camera.translation() - last_tracked_gray->T_world_camera.translation()) /
                   (static_cast<double>(t_ns - *previous_t_ns) * 1e-9);
       }
-      motion->reset(track.T_world_camera, v_world);
-      // The reset forgets the IMU readings; the filter starts at a visual pose only after one.
-      if (last_imu && last_imu->t_ns <= t_ns) (void)motion->addImu(*last_imu);
+      restartPrior(track.T_world_camera, v_world, t_ns);
     }
     motion->setSceneDepth(keyframe.scene_depth_m);
     motion->addVisualPose(t_ns, track.T_world_camera, track.covariance);
@@ -1251,7 +1259,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     m.refusals.count = 0;
   }
   if (restart) {
-    m.motion->reset(track.T_world_camera, restart_velocity);
+    m.restartPrior(track.T_world_camera, restart_velocity, t_ns);
     m.refusals.count = 0;
     m.refusals.taken_scores.clear();
     m.refusals.restarted = true;
