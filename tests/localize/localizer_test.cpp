@@ -158,6 +158,44 @@ TEST(Localizer, ARestartedFilterPredictsFromTheImuAtOnce) {
   EXPECT_LE(*restarted_at, 4);
 }
 
+// Started at an unknown velocity, the filter takes the first pose after the start only when it
+// is verified with motion_search_confident_score (that pose sets the velocity): a confident
+// score the box's true poses cannot reach leaves frame 1 refused and bridged, the default takes it.
+TEST(Localizer, AnUnknownVelocityStartTakesOnlyAConfidentlyVerifiedPose) {
+  for (double confident : {LocalizerOptions{}.motion_search_confident_score, 0.999}) {
+    SCOPED_TRACE(confident);
+    LocalizerOptions options;
+    options.keyframe_threading = KeyframeThreading::kSynchronous;
+    options.inertial.filter = InertialFilter::kEkf;
+    options.inertial.predictor.gravity_world = kGravityWorld;
+    options.motion_search_confident_score = confident;
+    auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
+    ASSERT_TRUE(created.ok()) << created.error().message;
+    Localizer& localizer = *created.value();
+    localizer.reset(test::localizeTruth(0));  // no velocity
+    const auto& images = test::localizeFrames(3);
+    int64_t t_imu = 0;
+    std::vector<LocalizationResult> results;
+    for (int i = 0; i < 3; ++i) {
+      for (; t_imu <= i * kFrameNs; t_imu += 5'000'000) ASSERT_TRUE(localizer.addImu(circlingImuAt(t_imu)).ok());
+      auto r = localizer.localize(i * kFrameNs, images[static_cast<size_t>(i)]);
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      results.push_back(*r);
+    }
+    EXPECT_EQ(results[0].state, TrackingState::kTracking);  // the start pose starts the filter
+    if (confident < 0.99) {
+      EXPECT_EQ(results[1].state, TrackingState::kTracking);
+      EXPECT_GE(results[1].verify_score, confident);
+      EXPECT_EQ(results[2].state, TrackingState::kTracking);
+    } else {
+      EXPECT_LT(results[1].verify_score, confident);
+      EXPECT_TRUE(results[1].visual_rejected);
+      EXPECT_EQ(results[1].state, TrackingState::kInertial);
+      EXPECT_GT(results[1].motion_search_probes, 0);  // the search ran for a better pose
+    }
+  }
+}
+
 TEST(Localizer, WorkerModeWaitsOnlyForTheFirstKeyframe) {
   auto localizer = makeLocalizer(KeyframeThreading::kWorkerThread);
   ASSERT_TRUE(localizer);

@@ -1186,9 +1186,19 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   }
   // 3b. Motion search: lost while the prior's uncertainty exceeds the deepest basin.
   // A pose the filter's gate refuses is as good as lost here.
+  // While the filter's velocity is unobserved (started at an unknown velocity, no second pose
+  // yet) its gate admits whatever that velocity's sigma reaches, and the pose it takes sets the
+  // velocity for the frames to come: a pose is then taken only when verified with
+  // motion_search_confident_score, found by the plain alignment as by the search.
+  auto unconfirmed = [&](const TrackResult& r) {
+    return prediction && prediction->inertial && prediction->velocity_unobserved &&
+           verificationScore(verificationFeatures(r, m.keyframes->current()->scene_depth_m), m.options.verification) <
+               m.options.motion_search_confident_score;
+  };
   auto refused = [&](const TrackResult& r) {
     return r.state == TrackingState::kTracking &&
-           !m.motion->consistent(*prediction, r.T_world_camera, r.covariance, m.keyframes->current()->scene_depth_m);
+           (!m.motion->consistent(*prediction, r.T_world_camera, r.covariance, m.keyframes->current()->scene_depth_m) ||
+            unconfirmed(r));
   };
   // The grid first: a settled prior has none, and its frames are not tested against the gate twice.
   const std::optional<Impl::SearchGrid> grid =
@@ -1232,7 +1242,8 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     out.inertial_sigma_m = prediction->sigma_m;
     if (track.state == TrackingState::kTracking) {
       out.visual_rejected =
-          !m.motion->consistent(*prediction, track.T_world_camera, track.covariance, keyframe.scene_depth_m);
+          !m.motion->consistent(*prediction, track.T_world_camera, track.covariance, keyframe.scene_depth_m) ||
+          unconfirmed(track);
       out.innovation = m.motion->lastInnovation();
     }
   }
