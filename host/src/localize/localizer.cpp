@@ -1186,12 +1186,15 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   }
   // 3b. Motion search: lost while the prior's uncertainty exceeds the deepest basin.
   // A pose the filter's gate refuses is as good as lost here.
-  // While the filter's velocity is unobserved (started at an unknown velocity, no second pose
-  // yet) its gate admits whatever that velocity's sigma reaches, and the pose it takes sets the
-  // velocity for the frames to come: a pose is then taken only when verified with
-  // motion_search_confident_score, found by the plain alignment as by the search.
+  // On the first frame after a start at an unknown velocity the filter's gate admits whatever
+  // that velocity's sigma reaches, and the pose it takes sets the velocity for the frames to come
+  // (its error over one frame interval): a plain alignment that does not verify with
+  // motion_search_confident_score goes to the motion search, whose confidently verified pose
+  // replaces it; when the search finds none, the plain pose is kept and gated as any other
+  // (imagery whose true poses verify below the confident score still starts: refusing them there
+  // left a blurred city drone bridged at zero velocity and lost for good).
   auto unconfirmed = [&](const TrackResult& r) {
-    return prediction && prediction->inertial && prediction->velocity_unobserved &&
+    return prediction && prediction->inertial && prediction->velocity_unobserved && m.untracked == 0 &&
            verificationScore(verificationFeatures(r, m.keyframes->current()->scene_depth_m), m.options.verification) <
                m.options.motion_search_confident_score;
   };
@@ -1242,8 +1245,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     out.inertial_sigma_m = prediction->sigma_m;
     if (track.state == TrackingState::kTracking) {
       out.visual_rejected =
-          !m.motion->consistent(*prediction, track.T_world_camera, track.covariance, keyframe.scene_depth_m) ||
-          unconfirmed(track);
+          !m.motion->consistent(*prediction, track.T_world_camera, track.covariance, keyframe.scene_depth_m);
       out.innovation = m.motion->lastInnovation();
     }
   }

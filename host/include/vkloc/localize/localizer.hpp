@@ -172,10 +172,10 @@ struct LocalizerOptions {
   /// keyframe rendered at it, from the motion_search_candidates probes with the most inliers
   /// (ties: the lower mean residual) that ended at distinct poses. Of the results tracked, passing the
   /// gate and verified (verification.min_score; motion_search_confident_score while the prior's
-  /// velocity is unobserved, MotionPrediction::velocity_unobserved) the best score is kept. While
-  /// an inertial prior's velocity is unobserved, the plain alignment's pose too is taken only
-  /// with motion_search_confident_score (a lower one goes to the search, and is bridged when the
-  /// search finds nothing better): the first pose after the start sets the velocity.
+  /// velocity is unobserved, MotionPrediction::velocity_unobserved) the best score is kept. On
+  /// the first frame after an inertial start at an unknown velocity the search also runs when the
+  /// plain alignment verifies below motion_search_confident_score (that pose would set the
+  /// velocity); the plain pose is kept when the search finds no confident one.
   /// 0 steps = off.
   int motion_search_steps = 6;
   int motion_search_candidates = 3;
