@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+#include <optional>
 #include <set>
 
 #include "localize/localize_scene.hpp"
@@ -80,28 +82,41 @@ ImuSample circlingImuAt(int64_t t_ns) {
   return s;
 }
 
+/// A synchronous Localizer with the EKF on the box scene, its options changed by `edit`.
+std::unique_ptr<Localizer> makeEkfLocalizer(const std::function<void(LocalizerOptions&)>& edit) {
+  LocalizerOptions options;
+  options.keyframe_threading = KeyframeThreading::kSynchronous;
+  options.inertial.filter = InertialFilter::kEkf;
+  options.inertial.predictor.gravity_world = kGravityWorld;
+  edit(options);
+  auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
+  EXPECT_TRUE(created.ok()) << created.error().message;
+  return created.ok() ? std::move(created).value() : nullptr;
+}
+
+/// Frames 0..n-1 of the box scene with the circling camera's IMU readings up to each frame's time.
+std::vector<LocalizationResult> runWithImu(Localizer& localizer, int frames) {
+  std::vector<LocalizationResult> out;
+  const auto& images = test::localizeFrames(frames);
+  int64_t t_imu = 0;
+  for (int i = 0; i < frames; ++i) {
+    for (; t_imu <= i * kFrameNs; t_imu += 5'000'000) EXPECT_TRUE(localizer.addImu(circlingImuAt(t_imu)).ok());
+    auto r = localizer.localize(i * kFrameNs, images[static_cast<size_t>(i)]);
+    EXPECT_TRUE(r.ok()) << r.error().message;
+    if (!r.ok()) break;
+    out.push_back(*r);
+  }
+  return out;
+}
+
 TEST(Localizer, WithTheEkfATrackedFrameReportsTheFiltersEstimate) {
-  const Eigen::Vector3d g_world = kGravityWorld;
-  auto imuAt = circlingImuAt;
   std::vector<LocalizationResult> runs[2];
   for (int report = 0; report < 2; ++report) {
-    LocalizerOptions options;
-    options.keyframe_threading = KeyframeThreading::kSynchronous;
-    options.inertial.filter = InertialFilter::kEkf;
-    options.inertial.predictor.gravity_world = g_world;
-    options.report_filtered_pose = report == 1;
-    auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
-    ASSERT_TRUE(created.ok()) << created.error().message;
-    Localizer& localizer = *created.value();
-    localizer.reset(test::localizeTruth(0));
-    const auto& images = test::localizeFrames(kFrames);
-    int64_t t_imu = 0;
-    for (int i = 0; i < kFrames; ++i) {
-      for (; t_imu <= i * kFrameNs; t_imu += 5'000'000) ASSERT_TRUE(localizer.addImu(imuAt(t_imu)).ok());
-      auto r = localizer.localize(i * kFrameNs, images[static_cast<size_t>(i)]);
-      ASSERT_TRUE(r.ok()) << r.error().message;
-      runs[report].push_back(*r);
-    }
+    auto localizer = makeEkfLocalizer([&](LocalizerOptions& o) { o.report_filtered_pose = report == 1; });
+    ASSERT_TRUE(localizer);
+    localizer->reset(test::localizeTruth(0));
+    runs[report] = runWithImu(*localizer, kFrames);
+    ASSERT_EQ(runs[report].size(), static_cast<size_t>(kFrames));
   }
   int filtered = 0;
   for (int i = 0; i < kFrames; ++i) {
@@ -130,28 +145,21 @@ TEST(Localizer, WithTheEkfATrackedFrameReportsTheFiltersEstimate) {
 // the next frame's prediction is inertial (before, the restart forgot the readings, and the
 // frames after it were predicted by constant velocity, lost ones neither bridged nor searched).
 TEST(Localizer, ARestartedFilterPredictsFromTheImuAtOnce) {
-  LocalizerOptions options;
-  options.keyframe_threading = KeyframeThreading::kSynchronous;
-  options.inertial.filter = InertialFilter::kEkf;
-  options.inertial.predictor.gravity_world = kGravityWorld;
-  auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
-  ASSERT_TRUE(created.ok()) << created.error().message;
-  Localizer& localizer = *created.value();
+  auto localizer = makeEkfLocalizer([](LocalizerOptions&) {});
+  ASSERT_TRUE(localizer);
   // 1 m/s across the view, given as known: the filter predicts 5 cm off a frame, and tightly.
   const Pose T0 = test::localizeTruth(0);
-  localizer.reset(T0, Eigen::Vector3d(T0.linear() * Eigen::Vector3d(1.0, 0, 0)));
-  const auto& images = test::localizeFrames(12);
-  int64_t t_imu = 0;
+  localizer->reset(T0, Eigen::Vector3d(T0.linear() * Eigen::Vector3d(1.0, 0, 0)));
+  const auto results = runWithImu(*localizer, 12);
+  ASSERT_EQ(results.size(), 12u);
   std::optional<int> restarted_at;
   for (int i = 0; i < 12; ++i) {
-    for (; t_imu <= i * kFrameNs; t_imu += 5'000'000) ASSERT_TRUE(localizer.addImu(circlingImuAt(t_imu)).ok());
-    auto r = localizer.localize(i * kFrameNs, images[static_cast<size_t>(i)]);
-    ASSERT_TRUE(r.ok()) << r.error().message;
-    if (r->prior_restarted && !restarted_at) restarted_at = i;
+    const LocalizationResult& r = results[static_cast<size_t>(i)];
+    if (r.prior_restarted && !restarted_at) restarted_at = i;
     if (restarted_at && i > *restarted_at) {
-      EXPECT_GT(r->inertial_sigma_m, 0.0) << i;  // an inertial prediction
-      EXPECT_EQ(r->state, TrackingState::kTracking) << i;
-      EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i)), 3e-3) << i;
+      EXPECT_GT(r.inertial_sigma_m, 0.0) << i;  // an inertial prediction
+      EXPECT_EQ(r.state, TrackingState::kTracking) << i;
+      EXPECT_LT(test::translationError(r.T_world_camera, test::localizeTruth(i)), 3e-3) << i;
     }
   }
   ASSERT_TRUE(restarted_at.has_value());
@@ -165,24 +173,11 @@ TEST(Localizer, ARestartedFilterPredictsFromTheImuAtOnce) {
 TEST(Localizer, AnUnknownVelocityStartSearchesUnlessTheFirstPoseIsConfident) {
   for (double confident : {LocalizerOptions{}.motion_search_confident_score, 0.999}) {
     SCOPED_TRACE(confident);
-    LocalizerOptions options;
-    options.keyframe_threading = KeyframeThreading::kSynchronous;
-    options.inertial.filter = InertialFilter::kEkf;
-    options.inertial.predictor.gravity_world = kGravityWorld;
-    options.motion_search_confident_score = confident;
-    auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
-    ASSERT_TRUE(created.ok()) << created.error().message;
-    Localizer& localizer = *created.value();
-    localizer.reset(test::localizeTruth(0));  // no velocity
-    const auto& images = test::localizeFrames(3);
-    int64_t t_imu = 0;
-    std::vector<LocalizationResult> results;
-    for (int i = 0; i < 3; ++i) {
-      for (; t_imu <= i * kFrameNs; t_imu += 5'000'000) ASSERT_TRUE(localizer.addImu(circlingImuAt(t_imu)).ok());
-      auto r = localizer.localize(i * kFrameNs, images[static_cast<size_t>(i)]);
-      ASSERT_TRUE(r.ok()) << r.error().message;
-      results.push_back(*r);
-    }
+    auto localizer = makeEkfLocalizer([&](LocalizerOptions& o) { o.motion_search_confident_score = confident; });
+    ASSERT_TRUE(localizer);
+    localizer->reset(test::localizeTruth(0));  // no velocity
+    const auto results = runWithImu(*localizer, 3);
+    ASSERT_EQ(results.size(), 3u);
     EXPECT_EQ(results[0].state, TrackingState::kTracking);  // the start pose starts the filter
     for (int i = 1; i < 3; ++i) {
       EXPECT_EQ(results[i].state, TrackingState::kTracking) << i;

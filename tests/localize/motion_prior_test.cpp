@@ -98,6 +98,18 @@ struct Flight {
   std::vector<ImuSample> imu;
 };
 
+/// Aiding options of the flight's world (z up, gravity -9.81 m/s^2).
+InertialAiding flightAiding() {
+  InertialAiding aiding;
+  aiding.predictor.gravity_world = Eigen::Vector3d(0, 0, -9.81);
+  return aiding;
+}
+
+/// Gives `prior` the readings of `imu` from index `next` up to and including time t_ns.
+void feedImu(MotionPrior& prior, const std::vector<ImuSample>& imu, size_t& next, int64_t t_ns) {
+  for (; next < imu.size() && imu[next].t_ns <= t_ns; ++next) ASSERT_TRUE(prior.addImu(imu[next]).ok());
+}
+
 Flight flight() {
   TrajectoryOptions o;
   o.kind = TrajectoryKind::kDroneFlight;
@@ -114,15 +126,12 @@ Flight flight() {
 
 TEST(InertialPrior, PredictsFromTheImuGatesAndBridges) {
   const Flight f = flight();
-  InertialAiding aiding;
-  aiding.predictor.gravity_world = Eigen::Vector3d(0, 0, -9.81);
+  const InertialAiding aiding = flightAiding();
   InertialPrior prior(aiding, MotionModel::kConstantVelocity);
   const int64_t t0 = f.trajectory.startNs();
   prior.reset(f.trajectory.evaluate(t0).T_world_body);
   size_t next = 0;
-  auto feed = [&](int64_t t) {
-    for (; next < f.imu.size() && f.imu[next].t_ns <= t; ++next) ASSERT_TRUE(prior.addImu(f.imu[next]).ok());
-  };
+  auto feed = [&](int64_t t) { feedImu(prior, f.imu, next, t); };
   // Visual poses (the truth) at 20 Hz for 1 s: then the IMU predicts.
   int64_t t = t0;
   for (int i = 0; i < 20; ++i, t += kFrameNs) {
@@ -206,16 +215,13 @@ TEST(EkfPrior, PredictsFromTheFirstFrameGatesBridgesAndOutputsAtTheImuRate) {
   const Flight f = flight();
   for (bool velocity_given : {true, false}) {
     SCOPED_TRACE(velocity_given ? "velocity given" : "velocity unknown");
-    InertialAiding aiding;
-    aiding.predictor.gravity_world = Eigen::Vector3d(0, 0, -9.81);
+    const InertialAiding aiding = flightAiding();
     EkfPrior prior(aiding, MotionModel::kConstantVelocity);
     const int64_t t0 = f.trajectory.startNs();
     const TrajectoryState start = f.trajectory.evaluate(t0);
     prior.reset(start.T_world_body, velocity_given ? std::optional<Eigen::Vector3d>(start.v_world_body) : std::nullopt);
     size_t next = 0;
-    auto feed = [&](int64_t t) {
-      for (; next < f.imu.size() && f.imu[next].t_ns <= t; ++next) ASSERT_TRUE(prior.addImu(f.imu[next]).ok());
-    };
+    auto feed = [&](int64_t t) { feedImu(prior, f.imu, next, t); };
     const Matrix6d visual = Matrix6d::Identity() * 1e-6;  // 1 mm, 1 mrad
     feed(t0);
     prior.setSceneDepth(10.0);
@@ -283,8 +289,7 @@ TEST(EkfPrior, FramesDeliveredLateAreGatedAndAppliedAtTheirOwnTime) {
   const Flight f = flight();
   const int64_t delay = 60'000'000;
   const Matrix6d visual = Matrix6d::Identity() * 1e-6;
-  InertialAiding aiding;
-  aiding.predictor.gravity_world = Eigen::Vector3d(0, 0, -9.81);
+  const InertialAiding aiding = flightAiding();
   std::optional<Pose> on_time_end;
   for (int64_t lag : {int64_t{0}, delay}) {
     SCOPED_TRACE(lag > 0 ? "late" : "on time");
@@ -293,9 +298,7 @@ TEST(EkfPrior, FramesDeliveredLateAreGatedAndAppliedAtTheirOwnTime) {
     const TrajectoryState start = f.trajectory.evaluate(t0);
     prior.reset(start.T_world_body, start.v_world_body);
     size_t next = 0;
-    auto feed = [&](int64_t t) {
-      for (; next < f.imu.size() && f.imu[next].t_ns <= t; ++next) ASSERT_TRUE(prior.addImu(f.imu[next]).ok());
-    };
+    auto feed = [&](int64_t t) { feedImu(prior, f.imu, next, t); };
     feed(t0);
     prior.addVisualPose(t0, start.T_world_body, visual);
     int64_t t = t0;
@@ -329,16 +332,13 @@ TEST(EkfPrior, FramesDeliveredLateAreGatedAndAppliedAtTheirOwnTime) {
 // frame the filter took no pose at.
 TEST(EkfPrior, FilteredIsThePosteriorAtTheFrameOfAnUpdate) {
   const Flight f = flight();
-  InertialAiding aiding;
-  aiding.predictor.gravity_world = Eigen::Vector3d(0, 0, -9.81);
+  const InertialAiding aiding = flightAiding();
   EkfPrior prior(aiding, MotionModel::kConstantVelocity);
   const int64_t t0 = f.trajectory.startNs();
   const TrajectoryState start = f.trajectory.evaluate(t0);
   prior.reset(start.T_world_body, start.v_world_body);
   size_t next = 0;
-  auto feed = [&](int64_t t) {
-    for (; next < f.imu.size() && f.imu[next].t_ns <= t; ++next) ASSERT_TRUE(prior.addImu(f.imu[next]).ok());
-  };
+  auto feed = [&](int64_t t) { feedImu(prior, f.imu, next, t); };
   const Matrix6d visual = Matrix6d::Identity() * 1e-4;  // 1 cm, 10 mrad
   feed(t0);
   EXPECT_FALSE(prior.filtered(t0).has_value());  // no filter before the first pose
