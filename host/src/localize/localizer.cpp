@@ -686,9 +686,6 @@ struct Localizer::Impl {
     return have;
   }
 
-  /// Takes a relocalized pose; the frame counts as tracked. The motion prior restarts there
-  /// (velocity unknown) unless `prediction` is an IMU prediction the pose agrees with (its gate):
-  /// a prior that bridged the loss keeps its velocity.
   /// Restarts the motion prior at a pose of the frame at t_ns, moving at v_world (m/s) or at an
   /// unknown velocity. The reset forgets the IMU readings and the filter starts at a visual pose
   /// only after one: the newest reading is given again, so the pose the prior takes next starts
@@ -699,6 +696,9 @@ struct Localizer::Impl {
     if (last_imu && last_imu->t_ns <= t_ns) (void)motion->addImu(*last_imu);
   }
 
+  /// Takes a relocalized pose; the frame counts as tracked. The motion prior restarts there
+  /// (velocity unknown) unless `prediction` is an IMU prediction the pose agrees with (its gate):
+  /// a prior that bridged the loss keeps its velocity.
   void adoptRelocalized(const TrackResult& track, int64_t t_ns, const ImageU8& gray,
                         const std::optional<MotionPrediction>& prediction, std::optional<int64_t> previous_t_ns,
                         LocalizationResult& out) {
