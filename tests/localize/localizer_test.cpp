@@ -25,10 +25,33 @@ std::unique_ptr<Localizer> makeLocalizer(KeyframeThreading threading) {
   return created.ok() ? std::move(created).value() : nullptr;
 }
 
-std::vector<LocalizationResult> run(Localizer& localizer, int frames, int first = 0) {
+// The ideal IMU (200 Hz, body = camera) of localizeTruth's camera: it circles the box at 10 deg/s
+// looking at a point on the world z axis, so it turns about z at that rate and accelerates
+// towards the axis. World z up, gravity -9.81 m/s^2 along it.
+const Eigen::Vector3d kGravityWorld(0, 0, -9.81);
+ImuSample circlingImuAt(int64_t t_ns) {
+  const double w = 0.5 * M_PI / 180.0 / (static_cast<double>(kFrameNs) * 1e-9);  // rad/s
+  const double t = static_cast<double>(t_ns) * 1e-9, a = -0.9 + w * t;
+  const Eigen::Matrix3d R_world_camera =
+      test::cameraLookingAt({2.0 * std::cos(a), 2.0 * std::sin(a), 1.2}, {0.0, 0.0, 0.15}).linear();
+  const Eigen::Vector3d acc_world = -w * w * Eigen::Vector3d(2.0 * std::cos(a), 2.0 * std::sin(a), 0.0);
+  ImuSample s;
+  s.t_ns = t_ns;
+  s.gyro_body = R_world_camera.transpose() * Eigen::Vector3d(0, 0, w);
+  s.accel_body = R_world_camera.transpose() * (acc_world - kGravityWorld);
+  return s;
+}
+
+/// Frames first..first+frames-1 of the box scene; with_imu: each after the circling camera's IMU
+/// readings from the first frame's time up to its own.
+std::vector<LocalizationResult> run(Localizer& localizer, int frames, int first = 0, bool with_imu = false) {
   std::vector<LocalizationResult> out;
   const auto& images = test::localizeFrames(first + frames);
+  int64_t t_imu = first * kFrameNs;
   for (int i = first; i < first + frames; ++i) {
+    for (; with_imu && t_imu <= i * kFrameNs; t_imu += 5'000'000) {
+      EXPECT_TRUE(localizer.addImu(circlingImuAt(t_imu)).ok());
+    }
     auto r = localizer.localize(i * kFrameNs, images[static_cast<size_t>(i)]);
     EXPECT_TRUE(r.ok()) << r.error().message;
     if (!r.ok()) break;
@@ -65,23 +88,6 @@ TEST(Localizer, SynchronousModeTracksAndIsDeterministic) {
 // With the EKF a tracked frame reports the filter's estimate after the update, and the
 // alignment's pose beside it; reporting one or the other changes nothing else (synchronous mode:
 // the alignments are bit for bit the same).
-// The ideal IMU (200 Hz, body = camera) of localizeTruth's camera: it circles the box at 10 deg/s
-// looking at a point on the world z axis, so it turns about z at that rate and accelerates
-// towards the axis. World z up, gravity -9.81 m/s^2 along it.
-const Eigen::Vector3d kGravityWorld(0, 0, -9.81);
-ImuSample circlingImuAt(int64_t t_ns) {
-  const double w = 0.5 * M_PI / 180.0 / (static_cast<double>(kFrameNs) * 1e-9);  // rad/s
-  const double t = static_cast<double>(t_ns) * 1e-9, a = -0.9 + w * t;
-  const Eigen::Matrix3d R_world_camera =
-      test::cameraLookingAt({2.0 * std::cos(a), 2.0 * std::sin(a), 1.2}, {0.0, 0.0, 0.15}).linear();
-  const Eigen::Vector3d acc_world = -w * w * Eigen::Vector3d(2.0 * std::cos(a), 2.0 * std::sin(a), 0.0);
-  ImuSample s;
-  s.t_ns = t_ns;
-  s.gyro_body = R_world_camera.transpose() * Eigen::Vector3d(0, 0, w);
-  s.accel_body = R_world_camera.transpose() * (acc_world - kGravityWorld);
-  return s;
-}
-
 /// A synchronous Localizer with the EKF on the box scene, its options changed by `edit`.
 std::unique_ptr<Localizer> makeEkfLocalizer(const std::function<void(LocalizerOptions&)>& edit) {
   LocalizerOptions options;
@@ -94,28 +100,13 @@ std::unique_ptr<Localizer> makeEkfLocalizer(const std::function<void(LocalizerOp
   return created.ok() ? std::move(created).value() : nullptr;
 }
 
-/// Frames 0..n-1 of the box scene with the circling camera's IMU readings up to each frame's time.
-std::vector<LocalizationResult> runWithImu(Localizer& localizer, int frames) {
-  std::vector<LocalizationResult> out;
-  const auto& images = test::localizeFrames(frames);
-  int64_t t_imu = 0;
-  for (int i = 0; i < frames; ++i) {
-    for (; t_imu <= i * kFrameNs; t_imu += 5'000'000) EXPECT_TRUE(localizer.addImu(circlingImuAt(t_imu)).ok());
-    auto r = localizer.localize(i * kFrameNs, images[static_cast<size_t>(i)]);
-    EXPECT_TRUE(r.ok()) << r.error().message;
-    if (!r.ok()) break;
-    out.push_back(*r);
-  }
-  return out;
-}
-
 TEST(Localizer, WithTheEkfATrackedFrameReportsTheFiltersEstimate) {
   std::vector<LocalizationResult> runs[2];
   for (int report = 0; report < 2; ++report) {
     auto localizer = makeEkfLocalizer([&](LocalizerOptions& o) { o.report_filtered_pose = report == 1; });
     ASSERT_TRUE(localizer);
     localizer->reset(test::localizeTruth(0));
-    runs[report] = runWithImu(*localizer, kFrames);
+    runs[report] = run(*localizer, kFrames, 0, true);
     ASSERT_EQ(runs[report].size(), static_cast<size_t>(kFrames));
   }
   int filtered = 0;
@@ -150,7 +141,7 @@ TEST(Localizer, ARestartedFilterPredictsFromTheImuAtOnce) {
   // 1 m/s across the view, given as known: the filter predicts 5 cm off a frame, and tightly.
   const Pose T0 = test::localizeTruth(0);
   localizer->reset(T0, Eigen::Vector3d(T0.linear() * Eigen::Vector3d(1.0, 0, 0)));
-  const auto results = runWithImu(*localizer, 12);
+  const auto results = run(*localizer, 12, 0, true);
   ASSERT_EQ(results.size(), 12u);
   std::optional<int> restarted_at;
   for (int i = 0; i < 12; ++i) {
@@ -176,7 +167,7 @@ TEST(Localizer, AnUnknownVelocityStartSearchesUnlessTheFirstPoseIsConfident) {
     auto localizer = makeEkfLocalizer([&](LocalizerOptions& o) { o.motion_search_confident_score = confident; });
     ASSERT_TRUE(localizer);
     localizer->reset(test::localizeTruth(0));  // no velocity
-    const auto results = runWithImu(*localizer, 3);
+    const auto results = run(*localizer, 3, 0, true);
     ASSERT_EQ(results.size(), 3u);
     EXPECT_EQ(results[0].state, TrackingState::kTracking);  // the start pose starts the filter
     for (int i = 1; i < 3; ++i) {

@@ -110,6 +110,13 @@ void feedImu(MotionPrior& prior, const std::vector<ImuSample>& imu, size_t& next
   for (; next < imu.size() && imu[next].t_ns <= t_ns; ++next) ASSERT_TRUE(prior.addImu(imu[next]).ok());
 }
 
+/// An EKF prior reset at the flight's start state, its velocity given.
+EkfPrior ekfAtStart(const InertialAiding& aiding, const TrajectoryState& start) {
+  EkfPrior prior(aiding, MotionModel::kConstantVelocity);
+  prior.reset(start.T_world_body, start.v_world_body);
+  return prior;
+}
+
 Flight flight() {
   TrajectoryOptions o;
   o.kind = TrajectoryKind::kDroneFlight;
@@ -293,10 +300,9 @@ TEST(EkfPrior, FramesDeliveredLateAreGatedAndAppliedAtTheirOwnTime) {
   std::optional<Pose> on_time_end;
   for (int64_t lag : {int64_t{0}, delay}) {
     SCOPED_TRACE(lag > 0 ? "late" : "on time");
-    EkfPrior prior(aiding, MotionModel::kConstantVelocity);
     const int64_t t0 = f.trajectory.startNs();
     const TrajectoryState start = f.trajectory.evaluate(t0);
-    prior.reset(start.T_world_body, start.v_world_body);
+    EkfPrior prior = ekfAtStart(aiding, start);
     size_t next = 0;
     auto feed = [&](int64_t t) { feedImu(prior, f.imu, next, t); };
     feed(t0);
@@ -333,10 +339,9 @@ TEST(EkfPrior, FramesDeliveredLateAreGatedAndAppliedAtTheirOwnTime) {
 TEST(EkfPrior, FilteredIsThePosteriorAtTheFrameOfAnUpdate) {
   const Flight f = flight();
   const InertialAiding aiding = flightAiding();
-  EkfPrior prior(aiding, MotionModel::kConstantVelocity);
   const int64_t t0 = f.trajectory.startNs();
   const TrajectoryState start = f.trajectory.evaluate(t0);
-  prior.reset(start.T_world_body, start.v_world_body);
+  EkfPrior prior = ekfAtStart(aiding, start);
   size_t next = 0;
   auto feed = [&](int64_t t) { feedImu(prior, f.imu, next, t); };
   const Matrix6d visual = Matrix6d::Identity() * 1e-4;  // 1 cm, 10 mrad
