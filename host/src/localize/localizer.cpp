@@ -315,7 +315,13 @@ struct Localizer::Impl {
     return probe;
   }
 
-  /// Live stages (once per image) + alignment on `backend` from `start`.
+  /// Inliers on the finest level of a result (0 unless tracked).
+  static double finestInliers(const TrackResult& r) {
+    return r.state == TrackingState::kTracking ? r.quality.inlier_ratio * r.quality.points_in_image : 0.0;
+  }
+
+  /// Live stages (once per image) + alignment on `backend` from `start` (from search_level when
+  /// deeper than the usual levels, and from the usual ones as a second hypothesis).
   Result<TrackResult> align(EdgeTrackingBackend& backend, const ImageU8& gray, const Pose& start,
                             LocalizationResult& out, bool& ready) {
     const EdgeReference& reference = keyframes->current()->reference;
@@ -340,7 +346,18 @@ struct Localizer::Impl {
         tracker.far_first_coarsest_level = std::max(tracker.far_first_coarsest_level, search_level);
       }
     }
-    Result<TrackResult> r = backend.align(slow ? *slow : reference, start, tracker);
+    const EdgeReference& points = slow ? *slow : reference;
+    Result<TrackResult> r = backend.align(points, start, tracker);
+    if (r.ok() && (tracker.coarsest_level != options.tracker.coarsest_level ||
+                   tracker.far_first_coarsest_level != options.tracker.far_first_coarsest_level)) {
+      // A deep start widens the basin, but where the scene is far and the view wide a coarse
+      // level barely tells a translation across the view from a rotation, and the finer levels
+      // do not pull back a start that slid along that valley: the alignment from the usual
+      // levels is a second hypothesis, and the one with more inliers on the finest level wins.
+      Result<TrackResult> usual = backend.align(points, start, options.tracker);
+      if (!usual.ok()) return usual.error();
+      if (finestInliers(*usual) > finestInliers(*r)) r = std::move(usual);
+    }
     out.align_ms += msSince(t0);
     return r;
   }

@@ -158,7 +158,10 @@ struct LocalizerOptions {
   /// pyramid is built that deep; 0 = never deeper than the tracker's own coarsest levels). A start
   /// with an unknown velocity thus searches coarse, a settled filter fine. Without a covariance
   /// (no IMU, or before its first reading) the first frame after a start, whose motion is unknown
-  /// (MotionPrediction::velocity_unobserved), starts at max_search_level.
+  /// (MotionPrediction::velocity_unobserved), starts at max_search_level. A frame started deeper
+  /// than the tracker's own levels is aligned from those as well, and the result with more
+  /// inliers on the finest level is kept (a coarse level may slide along the valley where a
+  /// translation across the view trades for a rotation, and the finer ones not pull it back).
   int max_search_level = 2;
   double search_sigmas = 3.0;
   double search_basin_px = 6.0;
