@@ -18,11 +18,18 @@ constexpr double kMinSigmaPx = 0.05;
 
 /// sum over all points of log(1 + r^2 / (nu sigma^2)), the negative log-likelihood of the
 /// t-distribution up to constants; points that do not contribute count as truncated.
-double robustCost(const std::vector<float>& residuals, double sigma, double nu, double truncation) {
+/// Robust cost (eq. 13 for one sigma) of the points whose `counted` flag is set: an invalid
+/// residual (a truncated distance) costs as much as the truncation.
+double robustCost(const std::vector<float>& residuals, const std::vector<uint8_t>& counted, double sigma, double nu,
+                  double truncation) {
   const double inv = 1.0 / (nu * sigma * sigma);
   const double invalid_cost = std::log1p(truncation * truncation * inv);
   double cost = 0;
-  for (float r : residuals) cost += r < 0 ? invalid_cost : std::log1p(static_cast<double>(r) * r * inv);
+  for (size_t i = 0; i < residuals.size(); ++i) {
+    if (!counted[i]) continue;
+    const float r = residuals[i];
+    cost += r < 0 ? invalid_cost : std::log1p(static_cast<double>(r) * r * inv);
+  }
   return cost;
 }
 
@@ -53,6 +60,23 @@ std::vector<EdgePoint> farPoints(const std::vector<EdgePoint>& points, double qu
 
 /// True when the 2x2 bilinear footprint of (u, v) lies inside a w x h image.
 bool footprintInside(double u, double v, int w, int h) { return u >= 0 && v >= 0 && u < w - 1 && v < h - 1; }
+
+/// Per point: 1 where it projects in front of `camera` with its bilinear footprint inside the
+/// image at T_camera_ref (as evaluateEdgePoint), else 0; ANDed into `mask` when `and_into`.
+void markInImage(const std::vector<EdgePoint>& points, const Pose& T_camera_ref, const PinholeCamera& camera,
+                 bool and_into, std::vector<uint8_t>& mask) {
+  if (!and_into) mask.assign(points.size(), 1);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d p = T_camera_ref * Eigen::Vector3d(points[i].x, points[i].y, points[i].z);
+    bool inside = p.z() > 1e-6;
+    if (inside) {
+      const double iz = 1.0 / p.z();
+      inside = footprintInside(camera.fx * p.x() * iz + camera.cx, camera.fy * p.y() * iz + camera.cy, camera.width,
+                               camera.height);
+    }
+    mask[i] = static_cast<uint8_t>(mask[i] && inside);
+  }
+}
 
 }  // namespace
 
@@ -441,8 +465,10 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
         auto first = backend.evaluate(level_index, T, options.nu, options.scale_iterations, kMinSigmaPx);
         if (!first.ok()) return first.error();
         EdgeEvaluation at_T = std::move(first).value();
-        double cost_at_T = 0;  // robust cost of at_T with its own scale, kept through rejected steps
-        bool cost_at_T_known = false;
+        const PinholeCamera level_camera = backend.levelCamera(level_index);
+        std::vector<uint8_t> in_image_at_T;  // points inside the image at T (markInImage)
+        std::vector<uint8_t> counted;        // ... and at the step's pose
+        markInImage(points, T, level_camera, false, in_image_at_T);
         double lambda = 0;
         for (int it = 0; it < options.max_iterations; ++it) {
           if (!at_T.eq) {
@@ -477,17 +503,18 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
           const Pose T_new = orthonormalized(applyLeftIncrement(T, delta));
           auto evaluated = backend.evaluate(level_index, T_new, options.nu, options.scale_iterations, kMinSigmaPx);
           if (!evaluated.ok()) return evaluated.error();
-          // Both costs with the scale at T (the robust cost of eq. 13 for one sigma).
-          if (!cost_at_T_known) {
-            cost_at_T = robustCost(at_T.residuals, at_T.sigma_px, options.nu, trunc);
-            cost_at_T_known = true;
-          }
-          const double cost_old = cost_at_T;
-          const double cost_new = robustCost(evaluated->residuals, at_T.sigma_px, options.nu, trunc);
+          // Both costs with the scale at T (the robust cost of eq. 13 for one sigma), over the
+          // points inside the image at both poses: a point that leaves the image (a zoom in from
+          // a keyframe made farther back moves the outer points out) says nothing against the
+          // step, while a truncated distance inside the image does.
+          counted = in_image_at_T;
+          markInImage(points, T_new, level_camera, true, counted);
+          const double cost_old = robustCost(at_T.residuals, counted, at_T.sigma_px, options.nu, trunc);
+          const double cost_new = robustCost(evaluated->residuals, counted, at_T.sigma_px, options.nu, trunc);
           if (cost_new <= cost_old) {
             T = T_new;
             at_T = std::move(evaluated).value();
-            cost_at_T_known = false;
+            markInImage(points, T, level_camera, false, in_image_at_T);
             lambda = lambda > options.initial_damping ? lambda * 0.1 : 0.0;
             // Converged: a step below min_step, or a cost that no longer falls by min_cost_decrease.
             if (delta.norm() < options.min_step || cost_old - cost_new <= options.min_cost_decrease * cost_old) break;
