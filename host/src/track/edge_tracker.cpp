@@ -18,15 +18,16 @@ constexpr double kMinSigmaPx = 0.05;
 
 /// sum over all points of log(1 + r^2 / (nu sigma^2)), the negative log-likelihood of the
 /// t-distribution up to constants; points that do not contribute count as truncated.
-/// Robust cost (eq. 13 for one sigma) of the points whose `counted` flag is set: an invalid
-/// residual (a truncated distance) costs as much as the truncation.
-double robustCost(const std::vector<float>& residuals, const std::vector<uint8_t>& counted, double sigma, double nu,
-                  double truncation) {
+/// Robust cost (eq. 13 for one sigma) of the points inside the image at both poses of a step
+/// (`in_a` and `in_b` set): an invalid residual there (a truncated distance) costs as much as
+/// the truncation.
+double robustCost(const std::vector<float>& residuals, const std::vector<uint8_t>& in_a,
+                  const std::vector<uint8_t>& in_b, double sigma, double nu, double truncation) {
   const double inv = 1.0 / (nu * sigma * sigma);
   const double invalid_cost = std::log1p(truncation * truncation * inv);
   double cost = 0;
   for (size_t i = 0; i < residuals.size(); ++i) {
-    if (!counted[i]) continue;
+    if (!in_a[i] || !in_b[i]) continue;
     const float r = residuals[i];
     cost += r < 0 ? invalid_cost : std::log1p(static_cast<double>(r) * r * inv);
   }
@@ -62,10 +63,10 @@ std::vector<EdgePoint> farPoints(const std::vector<EdgePoint>& points, double qu
 bool footprintInside(double u, double v, int w, int h) { return u >= 0 && v >= 0 && u < w - 1 && v < h - 1; }
 
 /// Per point: 1 where it projects in front of `camera` with its bilinear footprint inside the
-/// image at T_camera_ref (as evaluateEdgePoint), else 0; ANDed into `mask` when `and_into`.
+/// image at T_camera_ref (as evaluateEdgePoint), else 0.
 void markInImage(const std::vector<EdgePoint>& points, const Pose& T_camera_ref, const PinholeCamera& camera,
-                 bool and_into, std::vector<uint8_t>& mask) {
-  if (!and_into) mask.assign(points.size(), 1);
+                 std::vector<uint8_t>& in_image) {
+  in_image.resize(points.size());
   for (size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3d p = T_camera_ref * Eigen::Vector3d(points[i].x, points[i].y, points[i].z);
     bool inside = p.z() > 1e-6;
@@ -74,7 +75,7 @@ void markInImage(const std::vector<EdgePoint>& points, const Pose& T_camera_ref,
       inside = footprintInside(camera.fx * p.x() * iz + camera.cx, camera.fy * p.y() * iz + camera.cy, camera.width,
                                camera.height);
     }
-    mask[i] = static_cast<uint8_t>(mask[i] && inside);
+    in_image[i] = static_cast<uint8_t>(inside);
   }
 }
 
@@ -466,9 +467,9 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
         if (!first.ok()) return first.error();
         EdgeEvaluation at_T = std::move(first).value();
         const PinholeCamera level_camera = backend.levelCamera(level_index);
-        std::vector<uint8_t> in_image_at_T;  // points inside the image at T (markInImage)
-        std::vector<uint8_t> counted;        // ... and at the step's pose
-        markInImage(points, T, level_camera, false, in_image_at_T);
+        std::vector<uint8_t> in_image_at_T;     // points inside the image at T (markInImage)
+        std::vector<uint8_t> in_image_at_step;  // ... at the step's pose
+        markInImage(points, T, level_camera, in_image_at_T);
         double lambda = 0;
         for (int it = 0; it < options.max_iterations; ++it) {
           if (!at_T.eq) {
@@ -507,14 +508,15 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
           // points inside the image at both poses: a point that leaves the image (a zoom in from
           // a keyframe made farther back moves the outer points out) says nothing against the
           // step, while a truncated distance inside the image does.
-          counted = in_image_at_T;
-          markInImage(points, T_new, level_camera, true, counted);
-          const double cost_old = robustCost(at_T.residuals, counted, at_T.sigma_px, options.nu, trunc);
-          const double cost_new = robustCost(evaluated->residuals, counted, at_T.sigma_px, options.nu, trunc);
+          markInImage(points, T_new, level_camera, in_image_at_step);
+          const double cost_old =
+              robustCost(at_T.residuals, in_image_at_T, in_image_at_step, at_T.sigma_px, options.nu, trunc);
+          const double cost_new =
+              robustCost(evaluated->residuals, in_image_at_T, in_image_at_step, at_T.sigma_px, options.nu, trunc);
           if (cost_new <= cost_old) {
             T = T_new;
             at_T = std::move(evaluated).value();
-            markInImage(points, T, level_camera, false, in_image_at_T);
+            std::swap(in_image_at_T, in_image_at_step);
             lambda = lambda > options.initial_damping ? lambda * 0.1 : 0.0;
             // Converged: a step below min_step, or a cost that no longer falls by min_cost_decrease.
             if (delta.norm() < options.min_step || cost_old - cost_new <= options.min_cost_decrease * cost_old) break;
