@@ -427,6 +427,14 @@ class RecordingBackend : public EdgeAlignmentBackend {
   }
   Result<EdgeNormalEquations> accumulate(int level, const Pose& T_camera_ref, double sigma_px, double nu) override {
     ++accumulate_calls;
+    if (astray_step_m > 0) {
+      // Normal equations whose undamped step is astray_step_m along x.
+      EdgeNormalEquations eq{};
+      for (int i = 0; i < 6; ++i) eq[edgeNormalIndex(i, i)] = 1e3;
+      eq[kEdgeNormalGradientOffset] = -1e3 * astray_step_m;
+      eq[kEdgeNormalCountIndex] = 1000;
+      return eq;
+    }
     return cpu_.accumulate(level, T_camera_ref, sigma_px, nu);
   }
   Result<double> nearEdgeFraction(int level, double threshold_px) override {
@@ -436,6 +444,7 @@ class RecordingBackend : public EdgeAlignmentBackend {
   int residual_calls = 0;
   int accumulate_calls = 0;
   bool fail_residuals = false;
+  double astray_step_m = 0;  ///< > 0: accumulate() asks for this step along x (metres).
 
  private:
   CpuEdgeAlignment cpu_;
@@ -475,6 +484,25 @@ TEST(EdgeTrackerBackend, SeamGivesTheLiveFrameResultAndPropagatesErrors) {
   auto failed = trackFrame(*reference, backend, T_ref, options);
   ASSERT_FALSE(failed.ok());
   EXPECT_EQ(failed.error().code, ErrorCode::kGpuError);
+}
+
+// A step that would take every point out of the image has no point left to judge it by (a
+// point that leaves the image counts for nothing): it is refused, as any step that takes more
+// than half of the points in view out of it, and the damped steps that follow stay in view.
+TEST(EdgeTrackerBackend, AStepThatTakesThePointsOutOfViewIsRefused) {
+  const Model model = boxOnGround();
+  const PinholeCamera cam = smallCamera();
+  const Pose T_gt = test::cameraLookingAt({1.2, -1.4, 1.0}, {0.0, 0.0, 0.2});
+  auto reference = buildEdgeReference(render(model, cam, T_gt), cam, T_gt);
+  auto live = buildLiveFrame(render(model, cam, T_gt).gray, cam);
+  ASSERT_TRUE(reference.ok() && live.ok());
+  EdgeTrackerOptions options;
+  options.far_first_depth_quantile = 0.0;
+  RecordingBackend backend(*live);
+  backend.astray_step_m = 20.0;
+  auto r = trackFrame(*reference, backend, T_gt, options);
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_LT(poseError(r->T_world_camera, T_gt).translation_m, 0.5);
 }
 
 TEST(EdgeTrackerBackend, CpuBackendChecksLevelsAndCountsNearEdgePixels) {

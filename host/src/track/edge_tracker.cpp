@@ -16,11 +16,10 @@ namespace {
 /// Lower bound of the t-distribution scale, pixels (default of estimateTDistributionScale).
 constexpr double kMinSigmaPx = 0.05;
 
-/// sum over all points of log(1 + r^2 / (nu sigma^2)), the negative log-likelihood of the
-/// t-distribution up to constants; points that do not contribute count as truncated.
-/// Robust cost (eq. 13 for one sigma) of the points inside the image at both poses of a step
-/// (`in_a` and `in_b` set): an invalid residual there (a truncated distance) costs as much as
-/// the truncation.
+/// Robust cost (eq. 13 for one sigma): the sum of log(1 + r^2 / (nu sigma^2)), the negative
+/// log-likelihood of the t-distribution up to constants, over the points inside the image at
+/// both poses of a step (`in_a` and `in_b` set); an invalid residual there (a truncated
+/// distance) costs as much as the truncation.
 double robustCost(const std::vector<float>& residuals, const std::vector<uint8_t>& in_a,
                   const std::vector<uint8_t>& in_b, double sigma, double nu, double truncation) {
   const double inv = 1.0 / (nu * sigma * sigma);
@@ -508,12 +507,19 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
           // points inside the image at both poses: a point that leaves the image (a zoom in from
           // a keyframe made farther back moves the outer points out) says nothing against the
           // step, while a truncated distance inside the image does.
+          // A step that takes more than half of the points in the image out of it is refused: that
+          // is a step gone astray, not a zoom (which moves out the outer ring of points).
           markInImage(points, T_new, level_camera, in_image_at_step);
+          size_t in_image = 0, in_image_both = 0;
+          for (size_t i = 0; i < in_image_at_T.size(); ++i) {
+            in_image += in_image_at_T[i];
+            in_image_both += in_image_at_T[i] & in_image_at_step[i];
+          }
           const double cost_old =
               robustCost(at_T.residuals, in_image_at_T, in_image_at_step, at_T.sigma_px, options.nu, trunc);
           const double cost_new =
               robustCost(evaluated->residuals, in_image_at_T, in_image_at_step, at_T.sigma_px, options.nu, trunc);
-          if (cost_new <= cost_old) {
+          if (2 * in_image_both >= in_image && cost_new <= cost_old) {
             T = T_new;
             at_T = std::move(evaluated).value();
             std::swap(in_image_at_T, in_image_at_step);
