@@ -61,21 +61,20 @@ std::vector<EdgePoint> farPoints(const std::vector<EdgePoint>& points, double qu
 /// True when the 2x2 bilinear footprint of (u, v) lies inside a w x h image.
 bool footprintInside(double u, double v, int w, int h) { return u >= 0 && v >= 0 && u < w - 1 && v < h - 1; }
 
-/// Per point: 1 where it projects in front of `camera` with its bilinear footprint inside the
-/// image at T_camera_ref (as evaluateEdgePoint), else 0.
+/// Whether `point` projects in front of `camera` at T_camera_ref with its bilinear footprint
+/// inside the image (as evaluateEdgePoint asks before reading the distance field).
+bool projectsInImage(const EdgePoint& point, const Pose& T_camera_ref, const PinholeCamera& camera) {
+  const Eigen::Vector3d p = T_camera_ref * Eigen::Vector3d(point.x, point.y, point.z);
+  if (!(p.z() > 1e-6)) return false;
+  return footprintInside(camera.fx * p.x() / p.z() + camera.cx, camera.fy * p.y() / p.z() + camera.cy, camera.width,
+                         camera.height);
+}
+
+/// Per point: 1 where projectsInImage, else 0.
 void markInImage(const std::vector<EdgePoint>& points, const Pose& T_camera_ref, const PinholeCamera& camera,
                  std::vector<uint8_t>& in_image) {
   in_image.resize(points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d p = T_camera_ref * Eigen::Vector3d(points[i].x, points[i].y, points[i].z);
-    bool inside = p.z() > 1e-6;
-    if (inside) {
-      const double iz = 1.0 / p.z();
-      inside = footprintInside(camera.fx * p.x() * iz + camera.cx, camera.fy * p.y() * iz + camera.cy, camera.width,
-                               camera.height);
-    }
-    in_image[i] = static_cast<uint8_t>(inside);
-  }
+  for (size_t i = 0; i < points.size(); ++i) in_image[i] = projectsInImage(points[i], T_camera_ref, camera);
 }
 
 }  // namespace
@@ -597,15 +596,10 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
     return kind == kEdgeOcclusion ? 1 : kind == kEdgeCrease ? 2 : kind == kEdgeTexture ? 0 : -1;
   };
   for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d p = T * Eigen::Vector3d(points[i].x, points[i].y, points[i].z);
     const int kind = kindIndex(points[i].kind);
-    if (p.z() > 1e-6) {
-      const double u = finest.fx * p.x() / p.z() + finest.cx;
-      const double v = finest.fy * p.y() / p.z() + finest.cy;
-      if (footprintInside(u, v, finest.width, finest.height)) {
-        ++q.points_in_image;
-        if (kind >= 0) ++q.kind_points_in_image[static_cast<size_t>(kind)];
-      }
+    if (projectsInImage(points[i], T, finest)) {
+      ++q.points_in_image;
+      if (kind >= 0) ++q.kind_points_in_image[static_cast<size_t>(kind)];
     }
     const float r = i < residuals.size() ? residuals[i] : kInvalidResidual;
     if (r < 0) continue;
