@@ -151,6 +151,22 @@ struct TextureEdges {
   Status status = Status::success();
 };
 
+/// Drops the occlusion flags of pixel (x, y) whose near surface resumes behind the jump (a hole
+/// in the model, not its outline) and marks both sides in hole_rim. Out of line: the scan for
+/// flagged pixels stays a tight loop.
+[[gnu::noinline]] void dropHoleRimFlags(const ImageF32& D, int x, int y, int gap, double ratio, uint8_t& f,
+                                        ImageU8& hole_rim) {
+  for (const EdgeDirection& side : kOcclusionDirections) {
+    if (!(f & side.flag)) continue;
+    if (!nearSurfaceResumes(D, x, y, side.dx, side.dy, gap, ratio)) continue;
+    f &= static_cast<uint8_t>(~side.flag);
+    hole_rim.at(x, y) = 1;
+    const int qx = x + side.dx;
+    const int qy = y + side.dy;
+    if (qx >= 0 && qy >= 0 && qx < D.width && qy < D.height) hole_rim.at(qx, qy) = 1;
+  }
+}
+
 GeometricFlags geometricReferenceFlags(const ReferenceLevel& view, const ReferenceEdgeOptions& options) {
   const int w = view.depth.width;
   const int h = view.depth.height;
@@ -203,18 +219,12 @@ GeometricFlags geometricReferenceFlags(const ReferenceLevel& view, const Referen
   ImageU8 hole_rim;
   if (options.occlusion_edges && options.hole_gap_px > 0) {
     hole_rim = ImageU8(w, h, 1, 0);
+    constexpr uint8_t kOcclusionFlags =
+        kEdgePixelOcclusionRight | kEdgePixelOcclusionLeft | kEdgePixelOcclusionDown | kEdgePixelOcclusionUp;
     for (int y = 0; y < h; ++y) {
+      uint8_t* f = &flags.data[static_cast<size_t>(y) * w];
       for (int x = 0; x < w; ++x) {
-        uint8_t& f = flags.at(x, y);
-        for (const EdgeDirection& side : kOcclusionDirections) {
-          if (!(f & side.flag)) continue;
-          if (!nearSurfaceResumes(D, x, y, side.dx, side.dy, options.hole_gap_px, ratio)) continue;
-          f &= static_cast<uint8_t>(~side.flag);
-          hole_rim.at(x, y) = 1;
-          const int qx = x + side.dx;
-          const int qy = y + side.dy;
-          if (qx >= 0 && qy >= 0 && qx < w && qy < h) hole_rim.at(qx, qy) = 1;
-        }
+        if (f[x] & kOcclusionFlags) dropHoleRimFlags(D, x, y, options.hole_gap_px, ratio, f[x], hole_rim);
       }
     }
   }
