@@ -2,6 +2,7 @@
 // vkloc bench track: per-frame localization time per stage and backend on one sequence.
 // vkloc bench live: the live-image stages (pyramid, edges, distance fields) on one frame, per
 // GPU stage and against the CPU backend in the same run.
+// vkloc bench keyframe: a keyframe's render and its reference edge points at one true pose.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -10,6 +11,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "common.hpp"
 #include "vkloc/core/se3.hpp"
@@ -153,6 +155,7 @@ struct TrackBenchArgs {
   std::string policy = "when-needed";
   int runs = 5;
   size_t max_frames = 0;
+  std::string pace = "none";  // "camera": each frame given at its timestamp after the pass's start
   DeviceArgs device;
 };
 
@@ -197,6 +200,10 @@ void runTrackBench(const TrackBenchArgs& a) {
               "frame", "p90", "render", "ref.pts", "live", "align", "reused", "age", "waits", "lost", "create", "1st",
               "kf", "mean mm", "mean deg");
   std::vector<std::pair<std::string, std::string>> summaries;
+  const bool camera_pace = a.pace == "camera";
+  if (camera_pace) {
+    std::printf("frames given at the camera's pace (their timestamps); fps is then the camera's rate\n");
+  }
   for (const std::string& backend : a.backends) {
     for (const std::string& mode : a.keyframes) {
       LocalizerOptions options;
@@ -216,6 +223,11 @@ void runTrackBench(const TrackBenchArgs& a) {
         const auto t_pass = std::chrono::steady_clock::now();
         for (size_t i = 0; i < n; ++i) {
           const int64_t t_ns = seq.images[i].t_ns;
+          if (camera_pace) {
+            // A camera delivers frame i (t_ns - t_first) after the first; the keyframe worker
+            // uses the time between frames.
+            std::this_thread::sleep_until(t_pass + std::chrono::nanoseconds(t_ns - seq.images[0].t_ns));
+          }
           next_imu = feedSequenceImu(seq, next_imu, t_ns, *localizer);
           const LocalizationResult r = take(localizer->localize(t_ns, images[i]));
           if (pass < 0) {
@@ -276,8 +288,22 @@ struct LiveBenchArgs {
   int levels = 2;
   int runs = 60;
   std::string distance = "auto";
+  bool no_vulkan = false;
   DeviceArgs device;
 };
+
+/// Median, p10 and p90 of CPU buildLiveFrame runs (ms) after a few untimed ones.
+Stats timeCpuLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const LiveFrameOptions& options, int runs) {
+  LiveFrame cpu_frame;
+  std::vector<double> cpu;
+  const int warmup = 5;  // caches, thread pool start
+  for (int i = -warmup; i < runs; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    check(buildLiveFrame(gray, camera, options, cpu_frame));
+    if (i >= 0) cpu.push_back(msSince(t0));
+  }
+  return stats(cpu);
+}
 
 void runLiveBench(const LiveBenchArgs& a) {
   const Sequence seq = take(loadSequence(a.sequence));
@@ -291,6 +317,14 @@ void runLiveBench(const LiveBenchArgs& a) {
   LiveFrameOptions options;
   options.levels = a.levels;
   options.keep_intermediate = false;
+  options.distance_gradient = false;  // as the tracker's (the alignment computes it where it reads it)
+  if (a.no_vulkan) {
+    const Stats c = timeCpuLiveFrame(gray, camera, options, a.runs);
+    std::printf("%s frame %zu (%dx%d), %d levels; CPU only; medians of %d runs\n", seq.name.c_str(), index,
+                camera.width, camera.height, options.levels, a.runs);
+    std::printf("CPU frame (buildLiveFrame): median %.3f ms (p10 %.3f, p90 %.3f)\n", c.median, c.p10, c.p90);
+    return;
+  }
   const GpuDistanceMethod method = a.distance == "separable" ? GpuDistanceMethod::kSeparable
                                    : a.distance == "jfa"     ? GpuDistanceMethod::kJumpFlooding
                                                              : GpuDistanceMethod::kAuto;
@@ -320,13 +354,7 @@ void runLiveBench(const LiveBenchArgs& a) {
       it->second.push_back(t.ms);
     }
   }
-  LiveFrame cpu_frame;
-  std::vector<double> cpu;
-  for (int i = -warmup; i < a.runs; ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
-    check(buildLiveFrame(gray, camera, options, cpu_frame));
-    if (i >= 0) cpu.push_back(msSince(t0));
-  }
+  const Stats c = timeCpuLiveFrame(gray, camera, options, a.runs);
   double stage_sum = 0;
   std::printf("GPU stages (device time, ms):\n");
   for (const auto& [stage, ms] : per_stage) {
@@ -334,10 +362,84 @@ void runLiveBench(const LiveBenchArgs& a) {
     std::printf("  %-20s %8.3f\n", stage.c_str(), median(ms));
   }
   std::printf("  %-20s %8.3f (with a timestamp after every stage)\n", "sum", stage_sum);
-  const Stats g = stats(untimed), c = stats(cpu);
+  const Stats g = stats(untimed);
   std::printf("GPU frame, host wall (no timestamps): median %.3f ms (p10 %.3f, p90 %.3f)\n", g.median, g.p10, g.p90);
   std::printf("CPU frame (buildLiveFrame):           median %.3f ms (p10 %.3f, p90 %.3f)\n", c.median, c.p10, c.p90);
   std::printf("GPU / CPU (medians): %.2f\n", g.median / c.median);
+}
+
+struct KeyframeBenchArgs {
+  std::string sequence;
+  int frame = -1;  // -1: the middle frame
+  int runs = 60;
+  bool no_vulkan = false;
+  DeviceArgs device;
+};
+
+/// A keyframe's two halves at one frame's ground-truth pose: the render (colour, depth, normals)
+/// and the reference edge points built from it on the CPU, on one thread (the worker mode's
+/// keyframe thread) and on the thread pool (the synchronous mode), runs interleaved.
+void runKeyframeBench(const KeyframeBenchArgs& a) {
+  const Sequence seq = take(loadSequence(a.sequence));
+  if (seq.images.empty()) throw Failure{fmt::format("{}: images.txt lists no image", a.sequence)};
+  const size_t index = a.frame < 0 ? seq.images.size() / 2 : static_cast<size_t>(a.frame);
+  if (index >= seq.images.size()) {
+    throw Failure{fmt::format("--frame {}: the sequence has {} images", a.frame, seq.images.size())};
+  }
+  const int64_t t_ns = seq.images[index].t_ns;
+  const auto gt = std::find_if(seq.groundtruth.begin(), seq.groundtruth.end(),
+                               [&](const StampedPose& g) { return g.t_ns == t_ns; });
+  if (gt == seq.groundtruth.end()) {
+    throw Failure{fmt::format("{}: no ground-truth pose at image {} (t = {} ns)", a.sequence, index, t_ns)};
+  }
+  const Pose T_world_camera = gt->T_world_camera;
+  const PinholeCamera camera = sequenceCamera(seq);
+  const Model model = loadSequenceModel(seq);
+  std::unique_ptr<Renderer> renderer;
+  std::string device = "CPU reference renderer";
+  if (!a.no_vulkan) {
+    auto accelerator = take(makeGpuAccelerator(a.device.create()));
+    renderer = take(accelerator->createRenderer(model));
+    device = accelerator->describe();
+  } else {
+    renderer = take(CpuRenderer::create(model));
+  }
+  const LocalizerOptions defaults;
+  RenderSettings settings = defaults.render;
+  settings.outputs = kRenderAll;
+  const int warmup = 3;  // shader JIT, caches, thread pool start
+  std::vector<double> render_ms, serial_ms, parallel_ms;
+  RenderOutput view;
+  for (int i = -warmup; i < a.runs; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    view = take(renderer->render(camera, T_world_camera, settings));
+    if (i >= 0) render_ms.push_back(msSince(t0));
+  }
+  size_t points = 0, coarse = 0;
+  for (int i = -warmup; i < a.runs; ++i) {
+    for (const bool parallel : {false, true}) {
+      ReferenceEdgeOptions options = defaults.reference;
+      options.parallel = parallel;
+      RenderOutput copy = view;  // the keyframe hands its render over (moved, not copied)
+      const auto t0 = std::chrono::steady_clock::now();
+      const EdgeReference reference = take(buildEdgeReference(std::move(copy), camera, T_world_camera, options));
+      if (i < 0) continue;
+      (parallel ? parallel_ms : serial_ms).push_back(msSince(t0));
+      points = reference.points.size();
+      coarse = 0;
+      for (const auto& level : reference.coarse_points) coarse += level.size();
+    }
+  }
+  std::printf("%s frame %zu (%dx%d) at its true pose, model %zu triangles; %s; medians of %d runs\n", seq.name.c_str(),
+              index, camera.width, camera.height, model.triangleCount(), device.c_str(), a.runs);
+  auto line = [](const char* what, const std::vector<double>& ms) {
+    const Stats st = stats(ms);
+    std::printf("  %-34s %7.3f ms (p10 %.3f, p90 %.3f)\n", what, st.median, st.p10, st.p90);
+  };
+  line("render (colour, depth, normals)", render_ms);
+  line("edge points, one thread (worker)", serial_ms);
+  line("edge points, thread pool (sync)", parallel_ms);
+  std::printf("  %zu edge points at level 0, %zu at the coarser levels\n", points, coarse);
 }
 
 }  // namespace
@@ -388,6 +490,12 @@ static void addBenchVerb(CLI::App& app) {
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   track->add_option("--frames", targs->max_frames, "Use only the first N frames (0 = all)")->capture_default_str();
+  track
+      ->add_option("--pace", targs->pace,
+                   "none: each frame as soon as the last is done (throughput); camera: at its timestamp (a live "
+                   "camera's latency)")
+      ->check(CLI::IsMember({"none", "camera"}))
+      ->capture_default_str();
   track->callback([targs] { runTrackBench(*targs); });
 
   auto largs = std::make_shared<LiveBenchArgs>();
@@ -403,7 +511,18 @@ static void addBenchVerb(CLI::App& app) {
       ->check(CLI::IsMember({"auto", "separable", "jfa"}))
       ->capture_default_str();
   live->add_option("--runs", largs->runs, "Timed runs")->check(CLI::Range(1, 100000))->capture_default_str();
+  live->add_flag("--no-vulkan", largs->no_vulkan, "Time the CPU backend only (no device needed)");
   live->callback([largs] { runLiveBench(*largs); });
+
+  auto kargs = std::make_shared<KeyframeBenchArgs>();
+  CLI::App* keyframe = bench->add_subcommand(
+      "keyframe", "A keyframe at one frame's true pose: render, and its edge points on one thread and on the pool");
+  kargs->device.add(*keyframe);
+  keyframe->add_option("--sequence", kargs->sequence, "Sequence folder with ground truth")->required();
+  keyframe->add_option("--frame", kargs->frame, "Image index (default: the middle one)");
+  keyframe->add_option("--runs", kargs->runs, "Timed runs")->check(CLI::Range(1, 100000))->capture_default_str();
+  keyframe->add_flag("--no-vulkan", kargs->no_vulkan, "Render with the CPU reference rasterizer");
+  keyframe->callback([kargs] { runKeyframeBench(*kargs); });
 
   addVerifyBench(*bench);
   addRelocBench(*bench);

@@ -44,6 +44,29 @@ if(NOT out MATCHES "edge lines +[0-9.]+" OR NOT out MATCHES "GPU / CPU \\(median
   message(FATAL_ERROR "bench live output lacks the stages or the ratio:\n${out}")
 endif()
 run_fails("bench live, bad frame" "--frame 99" bench live --sequence ${seq} --frame 99)
+run_ok("bench live, CPU only" bench live --sequence ${seq} --runs 2 --no-vulkan)
+if(NOT out MATCHES "CPU only" OR NOT out MATCHES "CPU frame \\(buildLiveFrame\\): median [0-9.]+ ms" OR
+   out MATCHES "edge lines")
+  message(FATAL_ERROR "bench live --no-vulkan output:\n${out}")
+endif()
+# Frames at the camera's pace (timestamps 1/30 s apart here).
+run_ok("bench track, camera pace" bench track --sequence ${seq} --runs 1 --backends cpu --keyframes worker
+       --pace camera)
+if(NOT out MATCHES "camera's pace" OR NOT out MATCHES "\ncpu +worker +[0-9.]+ +[0-9.]+")
+  message(FATAL_ERROR "bench track --pace camera output:\n${out}")
+endif()
+# A keyframe's render and edge points at a true pose, on the device and on the CPU rasterizer.
+run_ok("bench keyframe" bench keyframe --sequence ${seq} --frame 2 --runs 2)
+if(NOT out MATCHES "render \\(colour, depth, normals\\) +[0-9.]+ ms" OR
+   NOT out MATCHES "edge points, one thread \\(worker\\) +[0-9.]+ ms" OR
+   NOT out MATCHES "edge points, thread pool \\(sync\\) +[0-9.]+ ms" OR NOT out MATCHES "[1-9][0-9]* edge points at level 0")
+  message(FATAL_ERROR "bench keyframe output:\n${out}")
+endif()
+run_ok("bench keyframe, CPU rasterizer" bench keyframe --sequence ${seq} --runs 1 --no-vulkan)
+if(NOT out MATCHES "CPU reference renderer")
+  message(FATAL_ERROR "bench keyframe --no-vulkan output:\n${out}")
+endif()
+run_fails("bench keyframe, bad frame" "--frame 99" bench keyframe --sequence ${seq} --frame 99)
 
 # Errors: missing sequence, bad option values, bad --init-offset.
 run_fails("missing sequence" "not|No such" track --sequence ${WORK}/nope --out ${WORK}/x.txt)
