@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <opencv2/imgproc.hpp>
 
@@ -35,6 +36,15 @@ constexpr EdgeDirection kOcclusionDirections[4] = {{kEdgePixelOcclusionRight, 1,
 constexpr EdgeDirection kCreaseDirections[2] = {{kEdgePixelCreaseRight, 1, 0}, {kEdgePixelCreaseDown, 0, 1}};
 
 constexpr double kPi = 3.14159265358979323846;
+
+/// True when x is a multiple of 8 and row[x .. x + 7] (inside the row of width w) are all 0:
+/// scans of sparse edge maps pass over eight pixels at a time.
+inline bool eightClear(const uint8_t* row, int x, int w) {
+  if ((x & 7) != 0 || x + 8 > w) return false;
+  uint64_t word;
+  std::memcpy(&word, row + x, sizeof word);
+  return word == 0;
+}
 
 /// True when two depths (metres, > 0) are on the same surface: no discontinuity.
 bool continuous(float a, float b, double ratio) {
@@ -87,25 +97,37 @@ ReferenceLevel downsampleReference(const ReferenceLevel& in) {
   out.depth = ImageF32(w, h, 1, 0.0f);
   const bool normals = in.normals.channels == 3 && in.normals.width == in.depth.width;
   if (normals) out.normals = ImageF32(w, h, 3, 0.0f);
+  const int in_w = in.depth.width;
+  const int in_h = in.depth.height;
   for (int y = 0; y < h; ++y) {
+    // The 2x2 input pixels, clamped to the input, in the order (x0, y0), (x1, y0), (x0, y1), (x1, y1):
+    // the first nearest wins.
+    const int sy[2] = {std::min(2 * y, in_h - 1), std::min(2 * y + 1, in_h - 1)};
+    float* depth_out = &out.depth.data[static_cast<size_t>(y) * w];
     for (int x = 0; x < w; ++x) {
+      const int sx[2] = {std::min(2 * x, in_w - 1), std::min(2 * x + 1, in_w - 1)};
       float best = 0;
-      int bx = -1, by = -1;
+      size_t source = 0;
+      bool found = false;
       for (int dy = 0; dy < 2; ++dy) {
+        const size_t row = static_cast<size_t>(sy[dy]) * in_w;
         for (int dx = 0; dx < 2; ++dx) {
-          const int sx = std::min(2 * x + dx, in.depth.width - 1);
-          const int sy = std::min(2 * y + dy, in.depth.height - 1);
-          const float z = in.depth.at(sx, sy);
+          const size_t i = row + static_cast<size_t>(sx[dx]);
+          const float z = in.depth.data[i];
           if (z > 0 && std::isfinite(z) && (best == 0 || z < best)) {
             best = z;
-            bx = sx;
-            by = sy;
+            source = i;
+            found = true;
           }
         }
       }
-      out.depth.at(x, y) = best;
-      if (normals && bx >= 0) {
-        for (int c = 0; c < 3; ++c) out.normals.at(x, y, c) = in.normals.at(bx, by, c);
+      depth_out[x] = best;
+      if (normals && found) {
+        const float* n = &in.normals.data[source * 3];
+        float* o = &out.normals.data[(static_cast<size_t>(y) * w + x) * 3];
+        o[0] = n[0];
+        o[1] = n[1];
+        o[2] = n[2];
       }
     }
   }
@@ -235,11 +257,8 @@ void textureReferenceEdges(const ReferenceLevel& view, const ReferenceEdgeOption
   out.status = detectEdgesImpl(view.gray, options.detector, out.gradients, out.edges);
 }
 
-/// Stage 1 (detectReferenceEdges) from its two halves; when texture_offsets is given it
-/// receives, per texture edge pixel, the sub-pixel offset (du, dv) of the edge from the pixel
-/// centre (2 channels, pixels). `texture` is null without texture edges.
-ImageU8 mergeReferenceEdges(const ReferenceLevel& view, GeometricFlags geometric_flags, const TextureEdges* texture,
-                            ImageF32* texture_offsets) {
+/// Stage 1 (detectReferenceEdges) from its two halves. `texture` is null without texture edges.
+ImageU8 mergeReferenceEdges(const ReferenceLevel& view, GeometricFlags geometric_flags, const TextureEdges* texture) {
   ImageU8 flags = std::move(geometric_flags.flags);
   if (texture == nullptr) return flags;
   const ImageU8& hole_rim = geometric_flags.hole_rim;
@@ -258,14 +277,18 @@ ImageU8 mergeReferenceEdges(const ReferenceLevel& view, GeometricFlags geometric
     return false;
   };
   const ImageU8* edges = &texture->edges;
-  if (texture_offsets) *texture_offsets = ImageF32(w, h, 2, 0.0f);
   // A geometric edge that shows in the gray image is represented by its texture edge pixels
   // (found by the same detector as the live image's edges, so both place it alike); the
   // geometric flags next to such pixels are dropped.
   ImageU8 geometric = flags;
   for (int y = 0; y < h; ++y) {
+    const uint8_t* edge_row = &edges->data[static_cast<size_t>(y) * w];
     for (int x = 0; x < w; ++x) {
-      if (!edges->at(x, y)) continue;
+      if (eightClear(edge_row, x, w)) {
+        x += 7;
+        continue;
+      }
+      if (!edge_row[x]) continue;
       bool has_surface = D.at(x, y) > 0;
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
@@ -276,25 +299,19 @@ ImageU8 mergeReferenceEdges(const ReferenceLevel& view, GeometricFlags geometric
           flags.at(nx, ny) &= kEdgePixelTexture;
         }
       }
-      if (has_surface && !nearHoleRim(x, y)) {
-        flags.at(x, y) |= kEdgePixelTexture;
-        if (texture_offsets) {
-          subpixelOffset(texture->gradients, x, y, texture_offsets->at(x, y, 0), texture_offsets->at(x, y, 1));
-        }
-      }
+      if (has_surface && !nearHoleRim(x, y)) flags.at(x, y) |= kEdgePixelTexture;
     }
   }
   return flags;
 }
 
-Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const ReferenceEdgeOptions& options,
-                                         ImageF32* texture_offsets = nullptr) {
+Result<ImageU8> detectReferenceEdgesImpl(const ReferenceLevel& view, const ReferenceEdgeOptions& options) {
   GeometricFlags geometric = geometricReferenceFlags(view, options);
-  if (!options.texture_edges) return mergeReferenceEdges(view, std::move(geometric), nullptr, texture_offsets);
+  if (!options.texture_edges) return mergeReferenceEdges(view, std::move(geometric), nullptr);
   TextureEdges texture;
   textureReferenceEdges(view, options, texture);
   VKLOC_TRY_STATUS(texture.status);
-  return mergeReferenceEdges(view, std::move(geometric), &texture, texture_offsets);
+  return mergeReferenceEdges(view, std::move(geometric), &texture);
 }
 
 }  // namespace
@@ -311,9 +328,11 @@ Result<ImageU8> detectReferenceEdges(const RenderOutput& view, const ReferenceEd
 
 namespace {
 
-/// Stage 2 (backProjectEdges); texture edge points are moved by texture_offsets when given.
+/// Stage 2 (backProjectEdges); with the gradients the texture edges were found on, texture
+/// edge points are moved to their sub-pixel edge (subpixelOffset).
 std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32& depth, const PinholeCamera& camera,
-                                            const ReferenceEdgeOptions& options, const ImageF32* texture_offsets) {
+                                            const ReferenceEdgeOptions& options,
+                                            const EdgeGradients* texture_gradients) {
   std::vector<EdgePoint> points;
   const int w = flags.width;
   const int h = flags.height;
@@ -324,16 +343,26 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
     const float z = depth.at(x, y);
     return std::isfinite(z) && z > 0 ? z : 0.0f;
   };
-  int px = 0, py = 0;  // pixel whose flags are emitted
+  int px = 0, py = 0;        // pixel whose flags are emitted
+  int near_background = -1;  // whether background lies within 2 pixels of (px, py); -1: not known yet
   auto nearBackground = [&]() {
+    if (near_background >= 0) return near_background == 1;
+    near_background = 0;
+    if (px >= 2 && py >= 2 && px + 2 < w && py + 2 < h) {
+      for (int dy = -2; dy <= 2 && !near_background; ++dy) {
+        const float* row = &depth.data[static_cast<size_t>(py + dy) * w + px - 2];
+        for (int dx = 0; dx < 5; ++dx) near_background |= !(std::isfinite(row[dx]) && row[dx] > 0);
+      }
+      return near_background == 1;
+    }
     for (int dy = -2; dy <= 2; ++dy) {
       for (int dx = -2; dx <= 2; ++dx) {
         const int nx = px + dx;
         const int ny = py + dy;
-        if (nx >= 0 && ny >= 0 && nx < w && ny < h && depthAt(nx, ny) <= 0) return true;
+        if (nx >= 0 && ny >= 0 && nx < w && ny < h && depthAt(nx, ny) <= 0) near_background = 1;
       }
     }
-    return false;
+    return near_background == 1;
   };
   auto emit = [&](double u, double v, double z, uint32_t kind) {
     // Eq. 3: P = pi^-1(u, Z) with metric depth Z (camera z).
@@ -346,11 +375,17 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
     points.push_back(p);
   };
   for (int y = 0; y < h; ++y) {
+    const uint8_t* flag_row = &flags.data[static_cast<size_t>(y) * w];
     for (int x = 0; x < w; ++x) {
-      const uint8_t f = flags.at(x, y);
+      if (eightClear(flag_row, x, w)) {
+        x += 7;
+        continue;
+      }
+      const uint8_t f = flag_row[x];
       if (!f) continue;
       px = x;
       py = y;
+      near_background = -1;
       const float zp = depthAt(x, y);
       if (f & kEdgePixelTexture) {
         // On or next to a depth jump the edge belongs to the near surface: take the smallest
@@ -365,9 +400,9 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
           }
         }
         if (z > 0) {
-          const bool offset = texture_offsets && texture_offsets->width == w && texture_offsets->height == h;
-          emit(x + (offset ? texture_offsets->at(x, y, 0) : 0.0), y + (offset ? texture_offsets->at(x, y, 1) : 0.0), z,
-               kEdgeTexture);
+          float du = 0, dv = 0;
+          if (texture_gradients) subpixelOffset(*texture_gradients, x, y, du, dv);
+          emit(x + static_cast<double>(du), y + static_cast<double>(dv), z, kEdgeTexture);
         }
       }
       if (zp <= 0) continue;
@@ -513,10 +548,10 @@ Result<EdgeReference> buildEdgeReferenceFrom(ReferenceLevel level0, const Pinhol
       const size_t i = static_cast<size_t>(k);
       const ReferenceLevel& level = levels[i];
       const PinholeCamera level_camera = pyramidCamera(camera, k);
-      ImageF32 offsets;
-      const ImageU8 flags =
-          mergeReferenceEdges(level, std::move(geometric[i]), options.texture_edges ? &texture[i] : nullptr, &offsets);
-      points[i] = subsampleEdgePoints(backProjectEdgesImpl(flags, level.depth, level_camera, options, &offsets),
+      const TextureEdges* level_texture = options.texture_edges ? &texture[i] : nullptr;
+      const ImageU8 flags = mergeReferenceEdges(level, std::move(geometric[i]), level_texture);
+      points[i] = subsampleEdgePoints(backProjectEdgesImpl(flags, level.depth, level_camera, options,
+                                                           level_texture ? &level_texture->gradients : nullptr),
                                       level_camera, options);
     }
   });
