@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 
 #include "track/edges_internal.hpp"
@@ -291,6 +292,15 @@ Result<DistanceField> computeDistanceField(const ImageU8& edges, float truncatio
 
 namespace {
 
+/// True when x is a multiple of 8 and row[x .. x + 7] lie before `end` and are all 0: scans of
+/// sparse edge maps pass over eight pixels at a time.
+inline bool eightClear(const uint8_t* row, int x, int end) {
+  if ((x & 7) != 0 || x + 8 > end) return false;
+  uint64_t word;
+  std::memcpy(&word, row + x, sizeof word);
+  return word == 0;
+}
+
 /// Working buffers of computeEdgeLines kept between frames of one level.
 struct EdgeLineScratch {
   std::vector<float> best;       ///< Squared distance of the nearest edge point so far, per pixel.
@@ -320,13 +330,22 @@ void computeEdgeLines(const ImageU8& edges, const EdgeGradients& g, ImageF32& li
   }
   sc.written.clear();
   sc.lines = lines.data.data();
+  // Raw pointers: stores through them cannot alias the vectors' own members.
+  float* best = sc.best.data();
+  float* out_lines = lines.data.data();
   const int r = static_cast<int>(std::ceil(kEdgeLineRadiusPx));
   for (int y = 1; y < h - 1; ++y) {
     const uint8_t* row = &edges.data[static_cast<size_t>(y) * w];
+    const float* gx_row = g.gx.ptr<float>(y);
+    const float* gy_row = g.gy.ptr<float>(y);
     for (int x = 1; x < w - 1; ++x) {
+      if (eightClear(row, x, w - 1)) {
+        x += 7;
+        continue;
+      }
       if (!row[x]) continue;
-      const float gx = g.gx.at<float>(y, x);
-      const float gy = g.gy.at<float>(y, x);
+      const float gx = gx_row[x];
+      const float gy = gy_row[x];
       const float m = std::sqrt(gx * gx + gy * gy);
       if (!(m > 0)) continue;
       const float nu = gx / m;
@@ -335,17 +354,21 @@ void computeEdgeLines(const ImageU8& edges, const EdgeGradients& g, ImageF32& li
       subpixelOffset(g, x, y, du, dv);
       const float eu = static_cast<float>(x) + du;
       const float ev = static_cast<float>(y) + dv;
+      const int x0 = std::max(x - r, 0);
+      const int x1 = std::min(x + r, w - 1);
       for (int qy = std::max(y - r, 0); qy <= std::min(y + r, h - 1); ++qy) {
-        for (int qx = std::max(x - r, 0); qx <= std::min(x + r, w - 1); ++qx) {
+        const float ov = static_cast<float>(qy) - ev;
+        const float ov2 = ov * ov;
+        float* best_row = best + static_cast<size_t>(qy) * w;
+        for (int qx = x0; qx <= x1; ++qx) {
           const float ou = static_cast<float>(qx) - eu;
-          const float ov = static_cast<float>(qy) - ev;
-          const float d2 = ou * ou + ov * ov;
-          const int i = qy * w + qx;
-          float& b = sc.best[static_cast<size_t>(i)];
+          const float d2 = ou * ou + ov2;
+          float& b = best_row[qx];
           if (d2 >= b) continue;
+          const int i = qy * w + qx;
           if (b == far2) sc.written.push_back(i);  // first write since the clear
           b = d2;
-          float* out = &lines.data[static_cast<size_t>(i) * 3];
+          float* out = out_lines + static_cast<size_t>(i) * 3;
           out[0] = nu * ou + nv * ov;
           out[1] = nu;
           out[2] = nv;
