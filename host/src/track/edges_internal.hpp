@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -15,6 +17,15 @@ namespace vkloc::track_detail {
 
 inline cv::Mat wrap(const ImageF32& image) {
   return cv::Mat(image.height, image.width, CV_32FC(image.channels), const_cast<float*>(image.data.data()));
+}
+
+/// True when x is a multiple of 8 and row[x .. x + 7] lie before `end` and are all 0: scans of
+/// sparse edge maps pass over eight pixels at a time.
+inline bool eightClear(const uint8_t* row, int x, int end) {
+  if ((x & 7) != 0 || x + 8 > end) return false;
+  uint64_t word;
+  std::memcpy(&word, row + x, sizeof word);
+  return word == 0;
 }
 
 /// Sobel / 8 gradients and magnitude of the image edges were detected on, and the detector's

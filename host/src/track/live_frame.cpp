@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <opencv2/imgproc.hpp>
 
 #include "track/edges_internal.hpp"
@@ -291,15 +290,6 @@ Result<DistanceField> computeDistanceField(const ImageU8& edges, float truncatio
 }
 
 namespace {
-
-/// True when x is a multiple of 8 and row[x .. x + 7] lie before `end` and are all 0: scans of
-/// sparse edge maps pass over eight pixels at a time.
-inline bool eightClear(const uint8_t* row, int x, int end) {
-  if ((x & 7) != 0 || x + 8 > end) return false;
-  uint64_t word;
-  std::memcpy(&word, row + x, sizeof word);
-  return word == 0;
-}
 
 /// Working buffers of computeEdgeLines kept between frames of one level.
 struct EdgeLineScratch {

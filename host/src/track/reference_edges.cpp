@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <functional>
 #include <opencv2/imgproc.hpp>
 
@@ -36,15 +35,6 @@ constexpr EdgeDirection kOcclusionDirections[4] = {{kEdgePixelOcclusionRight, 1,
 constexpr EdgeDirection kCreaseDirections[2] = {{kEdgePixelCreaseRight, 1, 0}, {kEdgePixelCreaseDown, 0, 1}};
 
 constexpr double kPi = 3.14159265358979323846;
-
-/// True when x is a multiple of 8 and row[x .. x + 7] (inside the row of width w) are all 0:
-/// scans of sparse edge maps pass over eight pixels at a time.
-inline bool eightClear(const uint8_t* row, int x, int w) {
-  if ((x & 7) != 0 || x + 8 > w) return false;
-  uint64_t word;
-  std::memcpy(&word, row + x, sizeof word);
-  return word == 0;
-}
 
 /// True when two depths (metres, > 0) are on the same surface: no discontinuity.
 bool continuous(float a, float b, double ratio) {
