@@ -305,13 +305,20 @@ Stats timeCpuLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const L
   return stats(cpu);
 }
 
+/// The image a one-frame bench uses: `frame`, or the middle one when it is negative. Failure
+/// when the sequence has no image or fewer than frame + 1.
+size_t benchFrameIndex(const Sequence& seq, const std::string& folder, int frame) {
+  if (seq.images.empty()) throw Failure{fmt::format("{}: images.txt lists no image", folder)};
+  const size_t index = frame < 0 ? seq.images.size() / 2 : static_cast<size_t>(frame);
+  if (index >= seq.images.size()) {
+    throw Failure{fmt::format("--frame {}: the sequence has {} images", frame, seq.images.size())};
+  }
+  return index;
+}
+
 void runLiveBench(const LiveBenchArgs& a) {
   const Sequence seq = take(loadSequence(a.sequence));
-  if (seq.images.empty()) throw Failure{fmt::format("{}: images.txt lists no image", a.sequence)};
-  const size_t index = a.frame < 0 ? seq.images.size() / 2 : static_cast<size_t>(a.frame);
-  if (index >= seq.images.size()) {
-    throw Failure{fmt::format("--frame {}: the sequence has {} images", a.frame, seq.images.size())};
-  }
+  const size_t index = benchFrameIndex(seq, a.sequence, a.frame);
   const PinholeCamera camera = sequenceCamera(seq);
   const ImageU8 gray = take(readImageU8(seq.imagePath(index), 1));
   LiveFrameOptions options;
@@ -381,11 +388,7 @@ struct KeyframeBenchArgs {
 /// keyframe thread) and on the thread pool (the synchronous mode), runs interleaved.
 void runKeyframeBench(const KeyframeBenchArgs& a) {
   const Sequence seq = take(loadSequence(a.sequence));
-  if (seq.images.empty()) throw Failure{fmt::format("{}: images.txt lists no image", a.sequence)};
-  const size_t index = a.frame < 0 ? seq.images.size() / 2 : static_cast<size_t>(a.frame);
-  if (index >= seq.images.size()) {
-    throw Failure{fmt::format("--frame {}: the sequence has {} images", a.frame, seq.images.size())};
-  }
+  const size_t index = benchFrameIndex(seq, a.sequence, a.frame);
   const int64_t t_ns = seq.images[index].t_ns;
   const auto gt = std::find_if(seq.groundtruth.begin(), seq.groundtruth.end(),
                                [&](const StampedPose& g) { return g.t_ns == t_ns; });
