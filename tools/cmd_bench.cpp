@@ -166,7 +166,9 @@ struct TrackBenchRun {
   double create_ms = 0, first_frame_ms = 0;
   std::vector<double> total, reused, render, reference, live, align, age;
   std::vector<double> t_err_mm, r_err_deg;
-  double wall_s = 0;  ///< Wall time of the timed passes (localize and IMU feed; images preloaded).
+  /// Wall time of the timed passes (localize and IMU feed; images preloaded; with --pace camera
+  /// also the waits for each frame's time).
+  double wall_s = 0;
   size_t lost = 0, waited = 0, frames = 0;
 };
 
@@ -272,7 +274,8 @@ void runTrackBench(const TrackBenchArgs& a) {
     }
   }
   std::printf(
-      "columns: fps = frames per second over the timed passes (throughput; images preloaded); frame / p90 = "
+      "columns: fps = frames per second over the timed passes (throughput; images preloaded; the camera's rate "
+      "with --pace camera); frame / p90 = "
       "latency of localize() (image in to pose out), median and 90th percentile, ms; render / ref.pts = keyframe "
       "render and edge points made on the caller's thread (0 when none), ms; live = pyramid, edges, distance "
       "fields; align = Gauss-Newton; reused = frames that made no keyframe; age = mean frames between a keyframe's "
@@ -421,6 +424,8 @@ void runKeyframeBench(const KeyframeBenchArgs& a) {
   size_t points = 0, coarse = 0;
   for (int i = -warmup; i < a.runs; ++i) {
     for (const bool parallel : {false, true}) {
+      // The default options' levels (3) are what the Localizer builds with its default
+      // max_search_level (Localizer::create sets reference.levels = live.levels).
       ReferenceEdgeOptions options = defaults.reference;
       options.parallel = parallel;
       RenderOutput copy = view;  // the keyframe hands its render over (moved, not copied)

@@ -67,6 +67,10 @@ if(NOT out MATCHES "CPU reference renderer")
   message(FATAL_ERROR "bench keyframe --no-vulkan output:\n${out}")
 endif()
 run_fails("bench keyframe, bad frame" "--frame 99" bench keyframe --sequence ${seq} --frame 99)
+# Without ground truth there is no true pose to render a keyframe at: a one-line error.
+file(COPY ${seq}/ DESTINATION ${WORK}/no_truth)
+file(REMOVE ${WORK}/no_truth/groundtruth.txt)
+run_fails("bench keyframe, no ground truth" "no ground-truth pose" bench keyframe --sequence ${WORK}/no_truth --runs 1)
 
 # Errors: missing sequence, bad option values, bad --init-offset.
 run_fails("missing sequence" "not|No such" track --sequence ${WORK}/nope --out ${WORK}/x.txt)

@@ -65,8 +65,9 @@ Result<ImageContentCheck> checkImageContent(const ImageU8& gray, const ImageCont
   std::array<int64_t, 256> differences{};
   double total = 0;
   // Column sums over the rows of one block row (a vectorised add per image row), reduced to the
-  // block sums when the block row ends. Every sum is an integer below 2^53: exact in double in
-  // any order.
+  // block sums when the block row ends. A column sum of 8-bit values fits in 32 bits up to 2^24
+  // rows per block row (images up to 2^30 rows at the 64 block rows); every other sum is an
+  // integer below 2^53, exact in double in any order.
   std::vector<uint32_t> columns(static_cast<size_t>(w), 0);
   auto flushBlockRow = [&](size_t by) {
     for (size_t bx = 0; bx < static_cast<size_t>(tw); ++bx) {

@@ -320,7 +320,7 @@ void computeEdgeLines(const ImageU8& edges, const EdgeGradients& g, ImageF32& li
   }
   sc.written.clear();
   sc.lines = lines.data.data();
-  // Raw pointers: stores through them cannot alias the vectors' own members.
+  // Raw pointers, not reloaded from the vectors after each sc.written.push_back.
   float* best = sc.best.data();
   float* out_lines = lines.data.data();
   const int r = static_cast<int>(std::ceil(kEdgeLineRadiusPx));
@@ -420,10 +420,10 @@ Status buildLiveFrame(const ImageU8& gray, const PinholeCamera& camera, const Li
   // Per level: edges (with their gradients), then the distance field (reads the edges) and the
   // edge lines (the edges and gradients). Level 0 is about four times the work of the rest
   // together: round 1 runs level 0's edges beside the coarser levels' edges and fields; round 2
-  // level 0's edge lines beside level 0's distance field and the coarser levels' edge lines. The
-  // calling thread runs the first task of each round (OpenCV's pool lends the second to a
-  // worker), so level 0's edge lines read its 3.6 MB of gradients from the cache of the core that
-  // made them: 15-25 % less time for the live stages than the other way round.
+  // level 0's edge lines beside level 0's distance field and the coarser levels' edge lines. With
+  // OpenCV's TBB backend the calling thread runs the first task of each round (not a promise of
+  // cv::parallel_for_; only speed depends on it), so level 0's edge lines read level 0's
+  // gradients from the cache of the core that made them.
   struct LevelScratch {
     EdgeGradients gradients;
     ImageU8 edges;
