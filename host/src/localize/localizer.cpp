@@ -263,10 +263,13 @@ struct Localizer::Impl {
   }
   bool live_ready = false;   ///< The active backend holds the current image's live frame.
   uint64_t uploaded_id = 0;  ///< Id of the keyframe the backends hold (setKeyframe; 0: none).
-  // Worker mode: running means of a keyframe's making time and of a frame's time on the
-  // caller's thread (ms), and the last frame interval (ns), for the request's lead.
+  // Worker mode: running means of a keyframe's making time and of the wall time between the
+  // starts of successive frames (ms: the caller's thread's time per frame when frames come back
+  // to back, the camera's period when they come at its pace), and the last frame interval in
+  // the images' time (ns), for the request's lead.
   double keyframe_ms_mean = 0;
-  double frame_ms_mean = 0;
+  double frame_period_ms_mean = 0;
+  std::optional<SteadyClock::time_point> last_frame_start;
   int64_t frame_interval_ns = 0;
 
   bool worker() const { return options.keyframe_threading == KeyframeThreading::kWorkerThread; }
@@ -818,9 +821,10 @@ struct Localizer::Impl {
   /// Worker mode: after a frame, asks for the next keyframe when the pose the camera will have
   /// once it is ready no longer fits the current one.
   void requestNextKeyframe(int64_t t_ns, const Pose& fallback, LocalizationResult& out) {
+    // A keyframe is adopted by the first frame that starts after it is made.
     int lead = 1;
-    if (keyframe_ms_mean > 0 && frame_ms_mean > 0) {
-      lead = static_cast<int>(std::ceil(keyframe_ms_mean / frame_ms_mean));
+    if (keyframe_ms_mean > 0 && frame_period_ms_mean > 0) {
+      lead = static_cast<int>(std::ceil(keyframe_ms_mean / frame_period_ms_mean));
     }
     lead = std::clamp(lead, std::min(1, options.max_keyframe_lead_frames), options.max_keyframe_lead_frames);
     const int64_t t_target = t_ns + lead * frame_interval_ns;
@@ -1123,6 +1127,14 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   }
   ++m.frame_index;
   if (m.last_t_ns) m.frame_interval_ns = t_ns - *m.last_t_ns;
+  if (m.worker()) {
+    // Frames a second or more apart (a paused stream) say nothing of the next frame's wait.
+    const double period_ms = m.last_frame_start ? msSince(*m.last_frame_start) : 0.0;
+    if (period_ms > 0 && period_ms < 1000) {
+      m.frame_period_ms_mean = m.frame_period_ms_mean > 0 ? 0.9 * m.frame_period_ms_mean + 0.1 * period_ms : period_ms;
+    }
+    m.last_frame_start = t_start;
+  }
   const std::optional<int64_t> previous_t_ns = m.last_t_ns;
 
   // 0. A frame with nothing to align (black, saturated, uniform): reported at once; the motion
@@ -1355,13 +1367,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   }
 
   // 6. Worker mode: the next keyframe, at the pose the camera will have when it is ready.
-  if (m.worker()) {
-    if (!out.reference_rendered) {
-      const double ms = msSince(t_start);
-      m.frame_ms_mean = m.frame_ms_mean > 0 ? 0.9 * m.frame_ms_mean + 0.1 * ms : ms;
-    }
-    m.requestNextKeyframe(t_ns, out.T_world_camera, out);
-  }
+  if (m.worker()) m.requestNextKeyframe(t_ns, out.T_world_camera, out);
   out.total_ms = msSince(t_start);
   return out;
 }

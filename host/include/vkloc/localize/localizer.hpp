@@ -115,8 +115,9 @@ struct LocalizerOptions {
   /// (deterministic: the same input gives the same output, for tests and debugging).
   KeyframeThreading keyframe_threading = KeyframeThreading::kWorkerThread;
   /// Worker mode: a keyframe is requested at the pose predicted for the frame at which it will
-  /// be ready (its measured making time over the measured time per frame), at most this many
-  /// frames ahead.
+  /// be ready (its measured making time over the measured wall time between frames: the time
+  /// per frame when frames come back to back, the camera's period when they come at its pace),
+  /// at most this many frames ahead.
   int max_keyframe_lead_frames = 4;
   /// Worker mode: run the worker thread at the lowest scheduling priority (Linux SCHED_IDLE):
   /// tracking frames are then never slowed by keyframe making, but on a machine whose cores
