@@ -36,6 +36,9 @@ constexpr EdgeDirection kCreaseDirections[2] = {{kEdgePixelCreaseRight, 1, 0}, {
 
 constexpr double kPi = 3.14159265358979323846;
 
+/// True when a rendered depth (metres) is a surface: positive and finite (background is 0).
+inline bool isSurface(float z) { return z > 0 && std::isfinite(z); }
+
 /// True when two depths (metres, > 0) are on the same surface: no discontinuity.
 bool continuous(float a, float b, double ratio) {
   return std::abs(static_cast<double>(a) - b) <= ratio * std::min(a, b);
@@ -104,7 +107,7 @@ ReferenceLevel downsampleReference(const ReferenceLevel& in) {
         for (int dx = 0; dx < 2; ++dx) {
           const size_t i = row + static_cast<size_t>(sx[dx]);
           const float z = in.depth.data[i];
-          if (z > 0 && std::isfinite(z) && (best == 0 || z < best)) {
+          if (isSurface(z) && (best == 0 || z < best)) {
             best = z;
             source = i;
             found = true;
@@ -136,7 +139,7 @@ bool nearSurfaceResumes(const ImageF32& D, int x, int y, int sx, int sy, int gap
   const int by = y - sy;
   if (bx >= 0 && by >= 0 && bx < D.width && by < D.height) {
     const float zb = D.at(bx, by);
-    if (zb > 0 && std::isfinite(zb) && continuous(zp, zb, ratio)) diz = izp - 1.0 / zb;
+    if (isSurface(zb) && continuous(zp, zb, ratio)) diz = izp - 1.0 / zb;
   }
   for (int k = 2; k <= gap; ++k) {
     const int qx = x + k * sx;
@@ -145,7 +148,7 @@ bool nearSurfaceResumes(const ImageF32& D, int x, int y, int sx, int sy, int gap
     const double iz = izp + k * diz;
     if (!(iz > 0)) return false;
     const float zq = D.at(qx, qy);
-    if (zq > 0 && std::isfinite(zq) && continuous(static_cast<float>(1.0 / iz), zq, ratio)) return true;
+    if (isSurface(zq) && continuous(static_cast<float>(1.0 / iz), zq, ratio)) return true;
   }
   return false;
 }
@@ -192,8 +195,8 @@ GeometricFlags geometricReferenceFlags(const ReferenceLevel& view, const Referen
   // One pair of 4-neighbours p, q (q right of or below p), row pointers given.
   auto pair = [&](float zp, float zq, const float* np, const float* nq, uint8_t& fp, uint8_t& fq, uint8_t to_q,
                   uint8_t to_p, uint8_t crease) {
-    const bool sp = zp > 0 && std::isfinite(zp);
-    const bool sq = zq > 0 && std::isfinite(zq);
+    const bool sp = isSurface(zp);
+    const bool sq = isSurface(zq);
     if (!sp && !sq) return;
     if (sp != sq || !continuous(zp, zq, ratio)) {
       if (options.occlusion_edges) {
@@ -331,7 +334,7 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
   auto depthAt = [&](int x, int y) -> float {
     if (x < 0 || y < 0 || x >= w || y >= h) return 0.0f;
     const float z = depth.at(x, y);
-    return std::isfinite(z) && z > 0 ? z : 0.0f;
+    return isSurface(z) ? z : 0.0f;
   };
   int px = 0, py = 0;        // pixel whose flags are emitted
   int near_background = -1;  // whether background lies within 2 pixels of (px, py); -1: not known yet
@@ -341,7 +344,7 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
     if (px >= 2 && py >= 2 && px + 2 < w && py + 2 < h) {
       for (int dy = -2; dy <= 2 && !near_background; ++dy) {
         const float* row = &depth.data[static_cast<size_t>(py + dy) * w + px - 2];
-        for (int dx = 0; dx < 5; ++dx) near_background |= !(std::isfinite(row[dx]) && row[dx] > 0);
+        for (int dx = 0; dx < 5; ++dx) near_background |= !isSurface(row[dx]);
       }
       return near_background == 1;
     }
