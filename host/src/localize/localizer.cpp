@@ -270,6 +270,7 @@ struct Localizer::Impl {
   double keyframe_ms_mean = 0;
   double frame_period_ms_mean = 0;
   std::optional<SteadyClock::time_point> last_frame_start;
+  bool last_frame_waited = false;  ///< The last frame waited for a keyframe (its period is not counted).
   int64_t frame_interval_ns = 0;
 
   bool worker() const { return options.keyframe_threading == KeyframeThreading::kWorkerThread; }
@@ -1128,9 +1129,10 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   ++m.frame_index;
   if (m.last_t_ns) m.frame_interval_ns = t_ns - *m.last_t_ns;
   if (m.worker()) {
-    // Frames a second or more apart (a paused stream) say nothing of the next frame's wait.
+    // Frames a second or more apart (a paused stream), and a frame that waited for a keyframe
+    // (a start, a loss), say nothing of the next frame's wait.
     const double period_ms = m.last_frame_start ? msSince(*m.last_frame_start) : 0.0;
-    if (period_ms > 0 && period_ms < 1000) {
+    if (period_ms > 0 && period_ms < 1000 && !m.last_frame_waited) {
       m.frame_period_ms_mean = m.frame_period_ms_mean > 0 ? 0.9 * m.frame_period_ms_mean + 0.1 * period_ms : period_ms;
     }
     m.last_frame_start = t_start;
@@ -1367,7 +1369,10 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   }
 
   // 6. Worker mode: the next keyframe, at the pose the camera will have when it is ready.
-  if (m.worker()) m.requestNextKeyframe(t_ns, out.T_world_camera, out);
+  if (m.worker()) {
+    m.last_frame_waited = out.reference_rendered;
+    m.requestNextKeyframe(t_ns, out.T_world_camera, out);
+  }
   out.total_ms = msSince(t_start);
   return out;
 }
