@@ -16,7 +16,7 @@ Result<std::unique_ptr<GpuEdgeTrackingBackend>> GpuEdgeTrackingBackend::create(s
   return std::unique_ptr<GpuEdgeTrackingBackend>(new GpuEdgeTrackingBackend(std::move(stages).value()));
 }
 
-Status GpuEdgeTrackingBackend::setLiveImage(const ImageU8& gray) {
+Status GpuEdgeTrackingBackend::setLiveImage(const ImageU8& gray, int /*levels*/) {
   ready_ = false;
   VKLOC_TRY_STATUS(stages_->processLiveImage(gray));
   ready_ = true;

@@ -13,6 +13,7 @@
 #include "vkloc/render/cpu_renderer.hpp"
 #include "vkloc/render/renderer.hpp"
 #include "vkloc/sim/demo_models.hpp"
+#include "vkloc/track/edge_backend.hpp"
 
 namespace vkloc {
 namespace {
@@ -523,6 +524,36 @@ TEST(EdgeTrackerBackend, CpuBackendChecksLevelsAndCountsNearEdgePixels) {
   auto empty = backend.accumulate(0, Pose::Identity(), 1.0, 5.0);
   ASSERT_TRUE(empty.ok());
   EXPECT_EQ((*empty)[kEdgeNormalCountIndex], 0.0);
+}
+
+// The CPU backend builds the levels it is asked for (0 or more than its options': all), and those
+// are the same as the full frame's: a frame that needs no deep search level skips building it.
+TEST(EdgeTrackerBackend, CpuBackendBuildsTheLevelsAskedFor) {
+  const PinholeCamera cam = vgaCamera();
+  const RenderOutput view = render(boxOnGround(), cam, test::cameraLookingAt({1.2, -1.4, 1.0}, {0.0, 0.0, 0.2}));
+  LiveFrameOptions options;
+  options.levels = 3;
+  auto created = CpuEdgeTrackingBackend::create(cam, options);
+  ASSERT_TRUE(created.ok()) << created.error().message;
+  CpuEdgeTrackingBackend& backend = **created;
+  for (int asked : {0, 3, 8, 1, 2, 3}) {
+    SCOPED_TRACE(asked);
+    ASSERT_TRUE(backend.setLiveImage(view.gray, asked).ok());
+    const int expected = asked == 0 || asked > 3 ? 3 : asked;
+    ASSERT_EQ(static_cast<int>(backend.liveFrame().levels.size()), expected);
+    LiveFrameOptions one = options;
+    one.keep_intermediate = false;
+    one.distance_gradient = false;
+    auto full = buildLiveFrame(view.gray, cam, one);
+    ASSERT_TRUE(full.ok());
+    for (int k = 0; k < expected; ++k) {
+      const LiveLevel& a = backend.liveFrame().levels[static_cast<size_t>(k)];
+      const LiveLevel& b = full->levels[static_cast<size_t>(k)];
+      EXPECT_EQ(a.field.distance.data, b.field.distance.data) << k;
+      EXPECT_EQ(a.edge_lines.data, b.edge_lines.data) << k;
+    }
+  }
+  EXPECT_FALSE(backend.setLiveImage(ImageU8(8, 8, 1, 0), 1).ok());  // not the camera's size
 }
 
 TEST(EdgeTracker, RejectsBadInput) {

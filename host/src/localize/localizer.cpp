@@ -261,7 +261,15 @@ struct Localizer::Impl {
     const int level = static_cast<int>(std::ceil(std::log2(ratio)));
     return std::clamp(level, 0, deepest);
   }
-  bool live_ready = false;   ///< The active backend holds the current image's live frame.
+  /// Pyramid levels of the current image's live frame the active backend holds (0: none).
+  int live_levels = 0;
+  /// Live levels the tracker's own options read; the deeper search levels (max_search_level)
+  /// are built only for the frames whose alignment or search starts there.
+  int usual_levels = 1;
+  /// Live levels an alignment starting at `start_level` reads.
+  int liveLevelsFor(int start_level) const {
+    return std::clamp(std::max(usual_levels, start_level + 1), 1, options.live.levels);
+  }
   uint64_t uploaded_id = 0;  ///< Id of the keyframe the backends hold (setKeyframe; 0: none).
   // Worker mode: running means of a keyframe's making time and of the wall time between the
   // starts of successive frames (ms: the caller's thread's time per frame when frames come back
@@ -298,12 +306,16 @@ struct Localizer::Impl {
     return uploadKeyframe();
   }
 
-  /// The live stages of `gray` on `backend` unless `ready` says they ran for this image.
-  Status ensureLive(EdgeTrackingBackend& backend, const ImageU8& gray, LocalizationResult& out, bool& ready) {
-    if (ready) return Status::success();
+  /// The live stages of `gray` on `backend` with `levels` pyramid levels, unless `built` says
+  /// they ran for this image with as many (built: the levels the backend holds, 0 for none; a
+  /// frame built shallower is built again, deeper).
+  Status ensureLive(EdgeTrackingBackend& backend, const ImageU8& gray, LocalizationResult& out, int& built,
+                    int levels) {
+    if (built >= levels) return Status::success();
     const auto t0 = SteadyClock::now();
-    VKLOC_TRY_STATUS(backend.setLiveImage(gray));
-    ready = true;
+    built = 0;
+    VKLOC_TRY_STATUS(backend.setLiveImage(gray, levels));
+    built = levels;
     out.live_ms += msSince(t0);
     return Status::success();
   }
@@ -327,7 +339,7 @@ struct Localizer::Impl {
   /// Live stages (once per image) + alignment on `backend` from `start` (from search_level when
   /// deeper than the usual levels, and from the usual ones as a second hypothesis).
   Result<TrackResult> align(EdgeTrackingBackend& backend, const ImageU8& gray, const Pose& start,
-                            LocalizationResult& out, bool& ready) {
+                            LocalizationResult& out, int& live_built) {
     const EdgeReference& reference = keyframes->current()->reference;
     if (reference.points.size() < 6) {
       // Nothing of the model is seen from the keyframe: a lost frame, not an error.
@@ -336,7 +348,7 @@ struct Localizer::Impl {
       lost.T_camera_ref = start.inverse() * reference.T_world_ref;
       return lost;
     }
-    VKLOC_TRY_STATUS(ensureLive(backend, gray, out, ready));
+    VKLOC_TRY_STATUS(ensureLive(backend, gray, out, live_built, liveLevelsFor(search_level)));
     const auto t0 = SteadyClock::now();
     std::optional<EdgeReference> slow;
     const std::optional<Pose> last_pose = motion->lastPose();
@@ -470,6 +482,7 @@ struct Localizer::Impl {
       }
     }
     // Probes: a few Gauss-Newton steps on the deepest level alone, scored by their inliers there.
+    VKLOC_TRY_STATUS(ensureLive(*active, gray_now, out, live_levels, liveLevelsFor(grid.level)));
     const EdgeTrackerOptions probe = probeOptions(grid.level, 5);
     struct Candidate {
       Pose start;
@@ -590,12 +603,12 @@ struct Localizer::Impl {
     } restore{*this, saved_level};
     auto alignAt = [&](const Pose& start, int level) {
       search_level = level;
-      return align(*active, gray, start, out, live_ready);
+      return align(*active, gray, start, out, live_levels);
     };
     // Stage 1: a keyframe at each candidate; starts at its pose and at that pose turned by the
     // image shifts between its render and the live image; each start probed with a few
     // Gauss-Newton steps on the deepest level alone and scored there.
-    VKLOC_TRY_STATUS(ensureLive(*active, gray, out, live_ready));
+    VKLOC_TRY_STATUS(ensureLive(*active, gray, out, live_levels, liveLevelsFor(deepest)));
     const EdgeTrackerOptions probe = probeOptions(deepest, 10);
     struct Probe {
       std::shared_ptr<const Keyframe> keyframe;
@@ -772,7 +785,7 @@ struct Localizer::Impl {
     out.t_ns = t_ns;
     out.image_content = content.content;
     out.image_contrast = content.contrast;
-    live_ready = false;
+    live_levels = 0;
     last_t_ns = t_ns;
     if (searching) {
       out.state = TrackingState::kInitializing;
@@ -801,8 +814,8 @@ struct Localizer::Impl {
       // Twice each: the first run includes shader compilation / allocation.
       for (int run = 0; run < 2; ++run) {
         LocalizationResult scratch;
-        bool ready = false;
-        Result<TrackResult> r = align(*backends[b], gray, guess, scratch, ready);
+        int built = 0;
+        Result<TrackResult> r = align(*backends[b], gray, guess, scratch, built);
         if (!r.ok()) return r.error();
         best[b] = scratch.live_ms + scratch.align_ms;
       }
@@ -865,8 +878,10 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
     const int deepest = std::max(t.coarsest_level, t.far_first_depth_quantile > 0 ? t.far_first_coarsest_level : 0);
     impl->options.live.levels = std::min(options.live.levels, std::max(deepest, t.finest_level) + 1);
   }
-  // The deepest search level is built whenever the search can start there: the EKF's uncertain
-  // predictions, and without a covariance the first frame after a start (searchLevel).
+  // The deepest search level can be built whenever the search can start there: the EKF's
+  // uncertain predictions, and without a covariance the first frame after a start (searchLevel);
+  // a frame builds it only then (liveLevelsFor), the keyframes always.
+  impl->usual_levels = impl->options.live.levels;
   if (options.max_search_level > 0) {
     impl->options.live.levels = std::max(impl->options.live.levels, std::min(8, options.max_search_level + 1));
   }
@@ -1161,7 +1176,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     out.t_ns = t_ns;
     out.image_contrast = image_contrast;
     out.state = TrackingState::kInitializing;
-    m.live_ready = false;
+    m.live_levels = 0;
     m.last_t_ns = t_ns;
     TrackResult found;
     Result<bool> searched = m.relocalize(gray, t_ns, m.search_region, found, out);
@@ -1204,8 +1219,8 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   m.search_level =
       m.searchLevel(T_world_camera_guess ? std::nullopt : prediction, m.keyframes->current()->scene_depth_m);
   out.search_level = m.search_level;
-  m.live_ready = false;
-  auto alignFrom = [&](const Pose& start) { return m.align(*m.active, gray, start, out, m.live_ready); };
+  m.live_levels = 0;
+  auto alignFrom = [&](const Pose& start) { return m.align(*m.active, gray, start, out, m.live_levels); };
   Result<TrackResult> aligned = alignFrom(guess);
   if (!aligned.ok()) return aligned.error();
   TrackResult track = std::move(aligned).value();

@@ -1,5 +1,7 @@
 #include "vkloc/track/edge_backend.hpp"
 
+#include <algorithm>
+
 namespace vkloc {
 
 Result<std::unique_ptr<CpuEdgeTrackingBackend>> CpuEdgeTrackingBackend::create(const PinholeCamera& camera,
@@ -12,11 +14,13 @@ Result<std::unique_ptr<CpuEdgeTrackingBackend>> CpuEdgeTrackingBackend::create(c
   return std::unique_ptr<CpuEdgeTrackingBackend>(new CpuEdgeTrackingBackend(camera, live));
 }
 
-Status CpuEdgeTrackingBackend::setLiveImage(const ImageU8& gray) {
+Status CpuEdgeTrackingBackend::setLiveImage(const ImageU8& gray, int levels) {
   ready_ = false;
+  LiveFrameOptions options = options_;
+  if (levels > 0) options.levels = std::min(levels, options_.levels);
   // Built into the previous frame's buffers: a fresh LiveFrame per frame costs ~8 MB of new
   // pages at 640x480 (distance, gradient and edge lines of every level).
-  VKLOC_TRY_STATUS(buildLiveFrame(gray, camera_, options_, live_));
+  VKLOC_TRY_STATUS(buildLiveFrame(gray, camera_, options, live_));
   ready_ = true;
   return Status::success();
 }

@@ -18,7 +18,9 @@ class GpuEdgeTrackingBackend final : public EdgeTrackingBackend {
   static Result<std::unique_ptr<GpuEdgeTrackingBackend>> create(std::shared_ptr<GpuContext> context,
                                                                 const PinholeCamera& camera,
                                                                 const LiveFrameOptions& options);
-  Status setLiveImage(const ImageU8& gray) override;
+  /// Builds every level of the options given to create() whatever `levels` asks (one recorded
+  /// command sequence).
+  Status setLiveImage(const ImageU8& gray, int levels) override;
   Status setKeyframe(const EdgeReference& keyframe) override;
   Result<TrackResult> align(const EdgeReference& points, const Pose& T_world_camera_guess,
                             const EdgeTrackerOptions& options) override;
