@@ -4,10 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "support/analytic_scenes.hpp"
+#include "track/edges_internal.hpp"
 #include "vkloc/core/random.hpp"
 #include "vkloc/render/cpu_renderer.hpp"
 #include "vkloc/render/renderer.hpp"
@@ -181,6 +183,35 @@ double keptFraction(const ImageU8& a, const ImageU8& b) {
     }
   }
   return total ? static_cast<double>(kept) / total : 0.0;
+}
+
+// The detector's quantiles: both ranks equal a full sort's values on gradient-like samples
+// (many exact zeros, ties, a long tail), at the ends, on one repeated value and beside +inf.
+TEST(EdgeDetector, RankSelectionEqualsSorting) {
+  std::mt19937 rng(7);
+  std::vector<float> scratch;
+  for (int trial = 0; trial < 40; ++trial) {
+    const size_t n = 1 + static_cast<size_t>(rng() % 5000);
+    std::vector<float> values(n);
+    std::exponential_distribution<float> tail(0.05f);
+    for (float& v : values) {
+      const uint32_t pick = rng() % 10;
+      v = pick < 3 ? 0.0f : pick == 3 ? static_cast<float>(rng() % 4) : tail(rng);
+    }
+    if (trial == 1) std::fill(values.begin(), values.end(), 2.5f);
+    if (trial == 2) values.back() = std::numeric_limits<float>::infinity();
+    if (trial == 3) values.front() = -0.0f;
+    std::vector<float> sorted = values;
+    std::sort(sorted.begin(), sorted.end());
+    const std::vector<std::pair<size_t, size_t>> ranks = {{0, 0},         {0, n - 1},     {n - 1, n - 1},
+                                                          {n / 3, n / 2}, {n / 2, n / 2}, {n / 10, (9 * n) / 10}};
+    for (const auto& [a, b] : ranks) {
+      float low = -1.0f, high = -1.0f;
+      track_detail::selectTwoRanks(values, a, b, scratch, low, high);
+      ASSERT_EQ(low, sorted[a]) << "trial " << trial << " n " << n << " rank " << a;
+      ASSERT_EQ(high, sorted[b]) << "trial " << trial << " n " << n << " rank " << b;
+    }
+  }
 }
 
 TEST(EdgeDetector, EdgesSurviveExposureAndGammaChanges) {

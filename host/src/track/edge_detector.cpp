@@ -4,7 +4,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 
 #include "track/edges_internal.hpp"
@@ -48,6 +50,99 @@ double rayleighQuantileFactor(double quantile) { return std::sqrt(-2.0 * std::lo
 
 namespace track_detail {
 
+namespace {
+/// selectTwoRanks' counts, kept per thread so that repeated frames do not allocate.
+std::vector<uint32_t>& countScratch() {
+  thread_local std::vector<uint32_t> counts;
+  return counts;
+}
+}  // namespace
+
+void selectTwoRanks(const std::vector<float>& values, size_t rank_low, size_t rank_high, std::vector<float>& scratch,
+                    float& low, float& high) {
+  // Non-negative IEEE-754 floats order as their bit patterns read as unsigned integers (the sign
+  // dropped: -0 is 0), so the top bits of the pattern are a monotonic bucket index. Bucket 0 holds
+  // exact zeros alone (flat image regions: often most of a frame). One pass counts the buckets, a
+  // second gathers the values of the (at most two) non-zero buckets holding the ranks, and a
+  // selection among those few gives the exact values (the values a sort would put there).
+  constexpr int kShift = 20;
+  constexpr size_t kBins = (size_t{1} << (31 - kShift)) + 1;
+  auto key = [](float v) {
+    uint32_t bits = 0;
+    std::memcpy(&bits, &v, sizeof bits);
+    return bits & 0x7fffffffu;
+  };
+  auto bucket = [&](float v) {
+    const uint32_t k = key(v);
+    return k == 0 ? 0u : (k >> kShift) + 1u;
+  };
+  // Four interleaved counts: runs of equal values would otherwise make each increment wait for
+  // the previous one to the same counter.
+  std::vector<uint32_t>& counts = countScratch();
+  counts.assign(4 * kBins, 0);
+  const size_t n = values.size();
+  size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    ++counts[bucket(values[i])];
+    ++counts[kBins + bucket(values[i + 1])];
+    ++counts[2 * kBins + bucket(values[i + 2])];
+    ++counts[3 * kBins + bucket(values[i + 3])];
+  }
+  for (; i < n; ++i) ++counts[bucket(values[i])];
+  for (size_t b = 0; b < kBins; ++b) counts[b] += counts[kBins + b] + counts[2 * kBins + b] + counts[3 * kBins + b];
+  // Bucket of each rank and the rank's offset inside it.
+  auto locate = [&](size_t rank, uint32_t& bin, size_t& offset) {
+    size_t below = 0;
+    for (size_t b = 0; b < kBins; ++b) {
+      if (rank < below + counts[b]) {
+        bin = static_cast<uint32_t>(b);
+        offset = rank - below;
+        return;
+      }
+      below += counts[b];
+    }
+  };
+  uint32_t bin_low = 0, bin_high = 0;
+  size_t offset_low = 0, offset_high = 0;
+  locate(rank_low, bin_low, offset_low);
+  locate(rank_high, bin_high, offset_high);
+  // The low bucket's values first, then the high bucket's (when they differ); zeros need none.
+  const size_t n_low = bin_low == 0 ? 0 : counts[bin_low];
+  const size_t n_high = bin_high == 0 || bin_high == bin_low ? 0 : counts[bin_high];
+  scratch.resize(n_low + n_high);
+  if (!scratch.empty()) {
+    // A bucket not gathered gets an index no value has.
+    const uint32_t gather_low = n_low > 0 ? bin_low : static_cast<uint32_t>(kBins);
+    const uint32_t gather_high = n_high > 0 ? bin_high : static_cast<uint32_t>(kBins);
+    size_t at_low = 0;
+    size_t at_high = n_low;
+    for (const float v : values) {
+      const uint32_t b = bucket(v);
+      if (b == gather_low) {
+        scratch[at_low++] = v;
+      } else if (b == gather_high) {
+        scratch[at_high++] = v;
+      }
+    }
+  }
+  // Values of one bucket compare as their bit patterns (NaNs included), as the buckets do.
+  auto less = [&](float x, float y) { return key(x) < key(y); };
+  const auto first = scratch.begin();
+  auto nth = [&](size_t begin, size_t at, size_t end) {
+    std::nth_element(first + static_cast<std::ptrdiff_t>(begin), first + static_cast<std::ptrdiff_t>(at),
+                     first + static_cast<std::ptrdiff_t>(end), less);
+    return scratch[at];
+  };
+  low = bin_low == 0 ? 0.0f : nth(0, offset_low, n_low);
+  if (bin_high == 0) {
+    high = 0.0f;
+  } else if (bin_high == bin_low) {
+    high = nth(offset_low, offset_high, n_low);  // the low selection left the larger values above it
+  } else {
+    high = nth(n_low, n_low + offset_high, n_low + n_high);
+  }
+}
+
 /// detectEdges into `edges`, leaving the gradients in `g`.
 Status detectEdgesImpl(const ImageF32& gray, const EdgeDetectorOptions& options, EdgeGradients& g, ImageU8& edges) {
   VKLOC_TRY_STATUS(validateEdgeDetectorOptions(options));
@@ -73,16 +168,15 @@ Status detectEdgesImpl(const ImageF32& gray, const EdgeDetectorOptions& options,
     for (int x = 0; x < w; x += 2) sample.push_back(row[x]);
   }
   const size_t k = std::min(sample.size() - 1, static_cast<size_t>(options.contrast_percentile * (sample.size() - 1)));
-  std::nth_element(sample.begin(), sample.begin() + static_cast<std::ptrdiff_t>(k), sample.end());
-  const double contrast = sample[k];
-  double noise_floor = 0.0;
-  if (options.noise_sigmas > 0.0 && k > 0) {
-    // The noise quantile lies below the contrast quantile: select it among the samples below k.
-    const size_t kn = std::min(k - 1, static_cast<size_t>(options.noise_quantile * (sample.size() - 1)));
-    std::nth_element(sample.begin(), sample.begin() + static_cast<std::ptrdiff_t>(kn),
-                     sample.begin() + static_cast<std::ptrdiff_t>(k));
-    noise_floor = options.noise_sigmas * sample[kn] / rayleighQuantileFactor(options.noise_quantile);
-  }
+  // The noise quantile lies below the contrast quantile (rank kn < k when there is one).
+  const bool with_noise = options.noise_sigmas > 0.0 && k > 0;
+  const size_t kn = with_noise ? std::min(k - 1, static_cast<size_t>(options.noise_quantile * (sample.size() - 1))) : k;
+  float contrast_value = 0.0f;
+  float noise_value = 0.0f;
+  selectTwoRanks(sample, kn, k, g.candidates, noise_value, contrast_value);
+  const double contrast = contrast_value;
+  const double noise_floor =
+      with_noise ? options.noise_sigmas * noise_value / rayleighQuantileFactor(options.noise_quantile) : 0.0;
   const float high =
       static_cast<float>(std::max({options.high_factor * contrast, options.min_high_gradient, noise_floor}));
   const float low = static_cast<float>(options.low_ratio * high);

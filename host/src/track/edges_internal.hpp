@@ -33,10 +33,17 @@ inline bool eightClear(const uint8_t* row, int x, int end) {
 struct EdgeGradients {
   cv::Mat gx, gy, mag;
   std::vector<float> sample;
+  std::vector<float> candidates;  ///< selectTwoRanks' working buffer.
   std::vector<uint8_t> state;
   std::vector<int> strong;  ///< Pixels (y w + x) at or above the high threshold, row-major.
   std::vector<int> stack;
 };
+
+/// The values of ranks rank_low <= rank_high (0-based, ascending) among `values`, all >= 0 (or
+/// NaN, which ranks above +inf): exactly the values a sort would put there, in about two linear
+/// passes. `values` must not be empty and rank_high < values.size(); `scratch` is working memory.
+void selectTwoRanks(const std::vector<float>& values, size_t rank_low, size_t rank_high, std::vector<float>& scratch,
+                    float& low, float& high);
 
 /// Gives `image` the size w x h x c with every value `fill`, reusing its memory.
 template <typename T>
