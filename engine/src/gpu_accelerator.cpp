@@ -16,11 +16,11 @@ Result<std::unique_ptr<GpuEdgeTrackingBackend>> GpuEdgeTrackingBackend::create(s
   return std::unique_ptr<GpuEdgeTrackingBackend>(new GpuEdgeTrackingBackend(std::move(stages).value()));
 }
 
-Status GpuEdgeTrackingBackend::setLiveImage(const ImageU8& gray, int /*levels*/) {
+Result<int> GpuEdgeTrackingBackend::setLiveImage(const ImageU8& gray, int /*levels*/) {
   ready_ = false;
   VKLOC_TRY_STATUS(stages_->processLiveImage(gray));
   ready_ = true;
-  return Status::success();
+  return stages_->levelCount();
 }
 
 Status GpuEdgeTrackingBackend::setKeyframe(const EdgeReference& keyframe) {

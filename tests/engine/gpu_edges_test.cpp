@@ -16,6 +16,7 @@
 
 #include "support/analytic_scenes.hpp"
 #include "support/gpu_test_support.hpp"
+#include "vkloc/engine/gpu_accelerator.hpp"
 #include "vkloc/io/image_io.hpp"
 #include "vkloc/sim/demo_models.hpp"
 
@@ -562,6 +563,21 @@ TEST_F(GpuEdges, RejectsBadInput) {
   auto fallback = GpuEdgeStages::create(context_, qvga(), wide);
   ASSERT_TRUE(fallback.ok());
   EXPECT_EQ((*fallback)->distanceMethod(), GpuDistanceMethod::kJumpFlooding);
+}
+
+// The backend over the stages builds every level whatever it is asked for and says so: the
+// Localizer then does not run the live stages again for a deeper search on the same image.
+TEST_F(GpuEdges, BackendBuildsEveryLevelAndSaysSo) {
+  LiveFrameOptions options;
+  options.levels = 3;
+  auto backend = GpuEdgeTrackingBackend::create(context_, qvga(), options);
+  ASSERT_TRUE(backend.ok()) << backend.error().message;
+  for (int asked : {1, 2, 0, 8}) {
+    auto built = (*backend)->setLiveImage(randomImage(320, 240, 3), asked);
+    ASSERT_TRUE(built.ok()) << built.error().message;
+    EXPECT_EQ(*built, 3) << asked;
+  }
+  EXPECT_FALSE((*backend)->setLiveImage(ImageU8(100, 100, 1), 1).ok());
 }
 
 double medianMs(std::vector<double> v) {

@@ -538,8 +538,10 @@ TEST(EdgeTrackerBackend, CpuBackendBuildsTheLevelsAskedFor) {
   CpuEdgeTrackingBackend& backend = **created;
   for (int asked : {0, 3, 8, 1, 2, 3}) {
     SCOPED_TRACE(asked);
-    ASSERT_TRUE(backend.setLiveImage(view.gray, asked).ok());
+    auto built = backend.setLiveImage(view.gray, asked);
+    ASSERT_TRUE(built.ok());
     const int expected = asked == 0 || asked > 3 ? 3 : asked;
+    EXPECT_EQ(*built, expected);
     ASSERT_EQ(static_cast<int>(backend.liveFrame().levels.size()), expected);
     LiveFrameOptions one = options;
     one.keep_intermediate = false;

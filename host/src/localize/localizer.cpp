@@ -308,14 +308,17 @@ struct Localizer::Impl {
 
   /// The live stages of `gray` on `backend` with `levels` pyramid levels, unless `built` says
   /// they ran for this image with as many (built: the levels the backend holds, 0 for none; a
-  /// frame built shallower is built again, deeper).
+  /// frame built shallower is built again, deeper). A backend that built more than asked (the
+  /// GPU backend builds all) is not asked again for those.
   Status ensureLive(EdgeTrackingBackend& backend, const ImageU8& gray, LocalizationResult& out, int& built,
                     int levels) {
     if (built >= levels) return Status::success();
     const auto t0 = SteadyClock::now();
     built = 0;
-    VKLOC_TRY_STATUS(backend.setLiveImage(gray, levels));
-    built = levels;
+    auto made = backend.setLiveImage(gray, levels);
+    if (!made.ok()) return made.error();
+    // Fewer than asked only where the image has no more levels: asking again would not add any.
+    built = std::max(levels, *made);
     out.live_ms += msSince(t0);
     return Status::success();
   }

@@ -14,7 +14,7 @@ Result<std::unique_ptr<CpuEdgeTrackingBackend>> CpuEdgeTrackingBackend::create(c
   return std::unique_ptr<CpuEdgeTrackingBackend>(new CpuEdgeTrackingBackend(camera, live));
 }
 
-Status CpuEdgeTrackingBackend::setLiveImage(const ImageU8& gray, int levels) {
+Result<int> CpuEdgeTrackingBackend::setLiveImage(const ImageU8& gray, int levels) {
   ready_ = false;
   LiveFrameOptions options = options_;
   if (levels > 0) options.levels = std::min(levels, options_.levels);
@@ -22,7 +22,7 @@ Status CpuEdgeTrackingBackend::setLiveImage(const ImageU8& gray, int levels) {
   // pages at 640x480 (distance, gradient and edge lines of every level).
   VKLOC_TRY_STATUS(buildLiveFrame(gray, camera_, options, live_));
   ready_ = true;
-  return Status::success();
+  return static_cast<int>(live_.levels.size());
 }
 
 Status CpuEdgeTrackingBackend::setKeyframe(const EdgeReference&) { return Status::success(); }

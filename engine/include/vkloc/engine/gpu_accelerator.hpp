@@ -19,8 +19,8 @@ class GpuEdgeTrackingBackend final : public EdgeTrackingBackend {
                                                                 const PinholeCamera& camera,
                                                                 const LiveFrameOptions& options);
   /// Builds every level of the options given to create() whatever `levels` asks (one recorded
-  /// command sequence).
-  Status setLiveImage(const ImageU8& gray, int levels) override;
+  /// command sequence), and returns that count.
+  Result<int> setLiveImage(const ImageU8& gray, int levels) override;
   Status setKeyframe(const EdgeReference& keyframe) override;
   Result<TrackResult> align(const EdgeReference& points, const Pose& T_world_camera_guess,
                             const EdgeTrackerOptions& options) override;

@@ -29,9 +29,10 @@ class EdgeTrackingBackend {
   /// stays in the backend until the next call. `levels`: the pyramid levels the caller's
   /// alignments will read (finest first; 0 or more than the options' levels: all of them); a
   /// backend may build more (the GPU backend builds all), and an alignment asked to start deeper
-  /// than what was built starts at the deepest built level. kInvalidArgument for a wrong size or
-  /// channel count; kGpuError when a device fails.
-  virtual Status setLiveImage(const ImageU8& gray, int levels) = 0;
+  /// than what was built starts at the deepest built level. Returns the number of levels built
+  /// (fewer than asked only where the image is too small for more). kInvalidArgument for a
+  /// wrong size or channel count; kGpuError when a device fails.
+  virtual Result<int> setLiveImage(const ImageU8& gray, int levels) = 0;
 
   /// Makes `keyframe` the reference whose point lists later align() calls use; a GPU backend
   /// uploads them once here. The object must stay alive and unchanged until the next
@@ -56,7 +57,7 @@ class CpuEdgeTrackingBackend final : public EdgeTrackingBackend {
   static Result<std::unique_ptr<CpuEdgeTrackingBackend>> create(const PinholeCamera& camera,
                                                                 const LiveFrameOptions& options);
   /// Builds min(levels, the options' levels) levels (all for 0).
-  Status setLiveImage(const ImageU8& gray, int levels) override;
+  Result<int> setLiveImage(const ImageU8& gray, int levels) override;
   Status setKeyframe(const EdgeReference& keyframe) override;
   Result<TrackResult> align(const EdgeReference& points, const Pose& T_world_camera_guess,
                             const EdgeTrackerOptions& options) override;
