@@ -434,6 +434,71 @@ double imageDistanceToBoxEdges(const Eigen::Vector3d& p_camera, const Eigen::Vec
   return best;
 }
 
+// The geometric flags equal the rule of ReferenceEdgeOptions, pair by pair, on seeded depth with
+// runs of background (the scan skips those eight pixels at a time), jumps, ties, +inf and NaN, at
+// widths that are and are not multiples of eight.
+TEST(ReferenceEdges, GeometricFlagsFollowThePairRule) {
+  std::mt19937 rng(11);
+  for (const int w : {37, 64, 8}) {
+    const int h = 23;
+    RenderOutput view;
+    view.depth = ImageF32(w, h, 1, 0.0f);
+    view.normals = ImageF32(w, h, 3, 0.0f);
+    view.gray = ImageU8(w, h, 1, 0);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const uint32_t pick = rng() % 16;
+        float z = 0.0f;  // background in long runs on the left half
+        if (x >= w / 3 || pick < 3) {
+          z = pick < 6    ? 2.0f
+              : pick < 10 ? 2.0f + 0.01f * static_cast<float>(rng() % 20)
+                          : 1.0f + static_cast<float>(rng() % 5);
+        }
+        if (pick == 15 && y == 5) z = std::numeric_limits<float>::infinity();
+        if (pick == 15 && y == 6) z = std::numeric_limits<float>::quiet_NaN();
+        view.depth.at(x, y) = z;
+        const float a = 0.3f * static_cast<float>(rng() % 8);
+        view.normals.at(x, y, 0) = std::sin(a);
+        view.normals.at(x, y, 2) = -std::cos(a);
+      }
+    }
+    ReferenceEdgeOptions options;
+    options.texture_edges = false;
+    options.hole_gap_px = 0;
+    auto flags = detectReferenceEdges(view, options);
+    ASSERT_TRUE(flags.ok()) << flags.error().message;
+    ImageU8 expected(w, h, 1, 0);
+    const float cos_crease = static_cast<float>(std::cos(options.crease_angle_deg * M_PI / 180.0));
+    auto surface = [](float z) { return z > 0 && std::isfinite(z); };
+    auto pair = [&](int px, int py, int qx, int qy, uint8_t to_q, uint8_t to_p, uint8_t crease) {
+      const float zp = view.depth.at(px, py), zq = view.depth.at(qx, qy);
+      if (!surface(zp) && !surface(zq)) return;
+      if (surface(zp) != surface(zq) ||
+          std::abs(static_cast<double>(zp) - zq) > options.depth_jump_ratio * std::min(zp, zq)) {
+        if (surface(zp) && (!surface(zq) || zp < zq)) {
+          expected.at(px, py) |= to_q;
+        } else {
+          expected.at(qx, qy) |= to_p;
+        }
+        return;
+      }
+      float dot = 0;
+      for (int c = 0; c < 3; ++c) dot += view.normals.at(px, py, c) * view.normals.at(qx, qy, c);
+      if (dot < cos_crease) expected.at(px, py) |= crease;
+    };
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        if (x + 1 < w) pair(x, y, x + 1, y, kEdgePixelOcclusionRight, kEdgePixelOcclusionLeft, kEdgePixelCreaseRight);
+        if (y + 1 < h) pair(x, y, x, y + 1, kEdgePixelOcclusionDown, kEdgePixelOcclusionUp, kEdgePixelCreaseDown);
+      }
+    }
+    int flagged = 0;
+    for (uint8_t f : expected.data) flagged += f != 0;
+    EXPECT_GT(flagged, w * h / 10) << "width " << w;
+    EXPECT_EQ(flags->data, expected.data) << "width " << w;
+  }
+}
+
 TEST(ReferenceEdges, BoxSilhouetteAndCreasePointsLieOnTheBoxEdges) {
   const Eigen::Vector3d lo(-0.3, -0.2, 0.0), hi(0.3, 0.25, 0.4);
   const Model box = test::makeBox(lo, hi);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <opencv2/imgproc.hpp>
 
@@ -38,6 +39,17 @@ constexpr double kPi = 3.14159265358979323846;
 
 /// True when a rendered depth (metres) is a surface: positive and finite (background is 0).
 inline bool isSurface(float z) { return z > 0 && std::isfinite(z); }
+
+/// True when all n depths are background: +0 exactly (as renders write it).
+inline bool allBackground(const float* z, int n) {
+  uint32_t any = 0;
+  for (int i = 0; i < n; ++i) {
+    uint32_t bits = 0;
+    std::memcpy(&bits, z + i, sizeof bits);
+    any |= bits;
+  }
+  return any == 0;
+}
 
 /// True when two depths (metres, > 0) are on the same surface: no discontinuity.
 bool continuous(float a, float b, double ratio) {
@@ -219,6 +231,12 @@ GeometricFlags geometricReferenceFlags(const ReferenceLevel& view, const Referen
     uint8_t* f = &flags.data[static_cast<size_t>(y) * w];
     uint8_t* f_below = z_below ? f + w : nullptr;
     for (int x = 0; x < w; ++x) {
+      // Background (depth +0) at x .. x + 7, its right neighbour and below: no pair there has
+      // a surface. Skipped eight at a time: a keyframe of a small or distant model is mostly sky.
+      if ((x & 7) == 0 && z_below && x + 9 <= w && allBackground(z + x, 9) && allBackground(z_below + x, 8)) {
+        x += 7;
+        continue;
+      }
       const float* np = n ? n + 3 * x : nullptr;
       if (x + 1 < w) {
         pair(z[x], z[x + 1], np, np ? np + 3 : nullptr, f[x], f[x + 1], kEdgePixelOcclusionRight,
