@@ -162,6 +162,44 @@ TEST(Localizer, ARestartedFilterPredictsFromTheImuAtOnce) {
   EXPECT_LE(*restarted_at, 4);
 }
 
+// The same wrong-velocity start with the score rule off: a filter that refuses every tracked pose
+// for restart_after_refused_s restarts at the last one whatever its score, and tracks from there;
+// with that rule off too it refuses on, the frames bridged by the IMU alone.
+TEST(Localizer, AFilterThatRefusesEveryPoseForLongRestartsWhateverTheScores) {
+  for (const double after_s : {0.15, 0.0}) {
+    SCOPED_TRACE(after_s);
+    auto localizer = makeEkfLocalizer([&](LocalizerOptions& o) {
+      o.restart_after_refusals = 0;
+      o.restart_after_refused_s = after_s;
+    });
+    ASSERT_TRUE(localizer);
+    const Pose T0 = test::localizeTruth(0);
+    localizer->reset(T0, Eigen::Vector3d(T0.linear() * Eigen::Vector3d(1.0, 0, 0)));
+    const auto results = run(*localizer, 12, 0, true);
+    ASSERT_EQ(results.size(), 12u);
+    std::optional<int> restarted_at;
+    int refused = 0;
+    for (int i = 0; i < 12; ++i) {
+      const LocalizationResult& r = results[static_cast<size_t>(i)];
+      refused += r.visual_rejected;
+      if (r.prior_restarted && !restarted_at) restarted_at = i;
+      if (restarted_at && i > *restarted_at) {
+        EXPECT_EQ(r.state, TrackingState::kTracking) << i;
+        EXPECT_LT(test::translationError(r.T_world_camera, test::localizeTruth(i)), 3e-3) << i;
+      }
+    }
+    if (after_s > 0) {
+      // Refused at 1, 2, 3 (0.1 s after the first refusal) and 4: restarted there.
+      ASSERT_TRUE(restarted_at.has_value());
+      EXPECT_LE(*restarted_at, 5);
+      EXPECT_GE(refused, 3);
+    } else {
+      EXPECT_FALSE(restarted_at.has_value());
+      EXPECT_GE(refused, 6);
+    }
+  }
+}
+
 // Started at an unknown velocity, the first frame's plain alignment goes to the motion search
 // unless it is verified with motion_search_confident_score (that pose sets the velocity); when the
 // search finds no confident pose the plain one is kept. A confident score the box's true poses
@@ -300,6 +338,8 @@ TEST(Localizer, BadInputIsAnErrorNotACrash) {
   EXPECT_TRUE(refused([](LocalizerOptions& o) { o.motion_search_confident_score = 1.5; }));
   EXPECT_TRUE(refused([](LocalizerOptions& o) { o.restart_after_refusals = -1; }));
   EXPECT_TRUE(refused([](LocalizerOptions& o) { o.restart_min_score = -0.5; }));
+  EXPECT_TRUE(refused([](LocalizerOptions& o) { o.restart_after_refused_s = -1.0; }));
+  EXPECT_TRUE(refused([](LocalizerOptions& o) { o.restart_after_refused_s = INFINITY; }));
   EXPECT_FALSE(refused([](LocalizerOptions& o) { o.motion_search_steps = 0; }));  // off is valid
   EXPECT_FALSE(Localizer::create(Model{}, test::localizeCamera(), LocalizerOptions{}, nullptr).ok());
   EXPECT_FALSE(parseLocalizerBackend("gpu").ok());

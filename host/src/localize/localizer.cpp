@@ -62,9 +62,11 @@ Status validateOptions(const LocalizerOptions& o) {
                      "motion_search_max_gap_s in 0..10, motion_search_min_response and "
                      "motion_search_confident_score in 0..1");
   }
-  if (o.restart_after_refusals < 0 || !finiteIn(o.restart_min_score, 0.0, 1.0)) {
+  if (o.restart_after_refusals < 0 || !finiteIn(o.restart_min_score, 0.0, 1.0) ||
+      !finiteIn(o.restart_after_refused_s, 0.0, 1e4)) {
     return makeError(ErrorCode::kInvalidArgument,
-                     "Localizer: need restart_after_refusals >= 0 and restart_min_score in 0..1");
+                     "Localizer: need restart_after_refusals >= 0, restart_min_score in 0..1 and "
+                     "restart_after_refused_s in 0..1e4");
   }
   const RelocalizationOptions& l = o.relocalization;
   if (l.candidates < 1 || l.candidates > 100 || l.rerank_candidates < 0 || l.rerank_candidates > 1000 ||
@@ -213,16 +215,21 @@ struct Localizer::Impl {
   /// The last frame whose pose was tracked and accepted: its image, pose and time.
   std::optional<TrackedImage> last_tracked_gray;
   /// Consecutive poses the motion prior refused that count against it (refusalCountsAgainstPrior),
-  /// the last one's time and pose.
+  /// the last one's time.
   struct Refusals {
     int count = 0;
     int64_t t_ns = 0;
-    Pose T_world_camera = Pose::Identity();
     bool restarted = false;  ///< Restarted, and no pose accepted under its gate since.
     /// Verification scores of the last kTakenScores poses the prior took (oldest first).
     std::vector<double> taken_scores;
   } refusals;
   static constexpr size_t kTakenScores = 5;
+  /// Tracked poses the motion prior refused in a row, whatever their scores
+  /// (LocalizerOptions::restart_after_refused_s): the first one's time and the last one's.
+  struct RefusedStretch {
+    std::optional<int64_t> first_t_ns;
+    int64_t last_t_ns = 0;
+  } refused_stretch;
   /// Records the verification score of a pose the motion prior took.
   void poseTaken(double score) {
     std::vector<double>& s = refusals.taken_scores;
@@ -758,6 +765,7 @@ struct Localizer::Impl {
     keyframes->frameTracked(track.quality);
     tracked_since_reset = true;
     refusals = {};
+    refused_stretch = {};
     untracked = 0;
     failed_searches = 0;
     last_tracked_t_ns = t_ns;
@@ -964,6 +972,7 @@ void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vec
   m.tracked_since_reset = false;
   m.last_tracked_gray.reset();
   m.refusals = {};
+  m.refused_stretch = {};
   m.searching = false;
   m.search_region.reset();
   m.untracked = 0;
@@ -1300,31 +1309,48 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   }
   // A prior that refuses well verified poses frame after frame is the one that is wrong (a
   // velocity taken from a poor first fix, a bias, poorly verified poses it took): after
-  // restart_after_refusals of them in a row (refusalCountsAgainstPrior) it restarts at this pose
-  // with the velocity of the last two.
+  // restart_after_refusals of them in a row (refusalCountsAgainstPrior) it restarts at this pose.
+  // So it does, whatever the scores, after refusing every tracked pose for
+  // restart_after_refused_s. Either way with an unknown velocity that the next poses pin down,
+  // as at a start: the velocity between two poses 1/20 s apart carries their errors divided by
+  // that interval (1 cm each: 0.3 m/s), and a filter started with it tightly drifts off at once.
   bool restart = false;
-  std::optional<Eigen::Vector3d> restart_velocity;
   if (out.visual_rejected && refusalCountsAgainstPrior(out.verify_score, m.refusals.taken_scores, Impl::kTakenScores,
                                                        m.options.restart_min_score, m.options.verification.min_score)) {
     if (m.refusals.count > 0 && t_ns > m.refusals.t_ns &&
         static_cast<double>(t_ns - m.refusals.t_ns) * 1e-9 <= m.options.motion_search_max_gap_s) {
       ++m.refusals.count;
-      const double dt = static_cast<double>(t_ns - m.refusals.t_ns) * 1e-9;
-      restart_velocity = (track.T_world_camera.translation() - m.refusals.T_world_camera.translation()) / dt;
     } else {
       m.refusals.count = 1;
     }
     m.refusals.t_ns = t_ns;
-    m.refusals.T_world_camera = track.T_world_camera;
     restart = m.options.restart_after_refusals > 0 && m.refusals.count >= m.options.restart_after_refusals;
   } else {
     m.refusals.count = 0;
   }
-  if (restart) {
-    m.restartPrior(track.T_world_camera, restart_velocity, t_ns);
+  bool refused_too_long = false;
+  if (out.visual_rejected) {
+    Impl::RefusedStretch& s = m.refused_stretch;
+    if (!s.first_t_ns || t_ns <= s.last_t_ns ||
+        static_cast<double>(t_ns - s.last_t_ns) * 1e-9 > m.options.motion_search_max_gap_s) {
+      s.first_t_ns = t_ns;
+    }
+    s.last_t_ns = t_ns;
+    refused_too_long = m.options.restart_after_refused_s > 0 &&
+                       static_cast<double>(t_ns - *s.first_t_ns) * 1e-9 >= m.options.restart_after_refused_s;
+  } else if (track.state == TrackingState::kTracking) {
+    m.refused_stretch = {};
+  }
+  if (restart || refused_too_long) {
+    m.restartPrior(track.T_world_camera, std::nullopt, t_ns);
     m.refusals.count = 0;
-    m.refusals.taken_scores.clear();
-    m.refusals.restarted = true;
+    m.refused_stretch = {};
+    if (restart) {
+      // Until the restarted prior has a pose of its own to gate with, only verified poses are
+      // taken (below); after a stretch of refusals whatever the scores, any tracked pose is.
+      m.refusals.taken_scores.clear();
+      m.refusals.restarted = true;
+    }
     out.visual_rejected = false;
     out.prior_restarted = true;
   } else if (m.refusals.restarted && track.state == TrackingState::kTracking && !out.visual_rejected &&
