@@ -13,8 +13,8 @@
 #                  alignments biased on the simulator's blurred frames, its velocity and tilt went
 #                  wrong and its gate then refused the right poses. Since a prior that refuses
 #                  every pose for LocalizerOptions::restart_after_refused_s restarts, the test
-#                  passes (4 sync, 8-10 worker, longest 0.15 s) and is no longer labelled open. Over 15 s room hard also fails with the window fit
-#                  (29 of 301 frames, frames 126-157 in one stretch: the simplified model's rug,
+#                  passes (4 sync, 8-10 worker, longest 0.15 s) and is no longer labelled open.
+#                  Over 15 s room hard also failed with the window fit (29 of 301 frames, frames 126-157 in one stretch: the simplified model's rug,
 #                  whiteboard and books have lost their texture, 35-42 % inliers at 0.66-0.76 px).
 # Skipped when the ViSP data is not installed (a "-- skipped: " line, ctest SKIP_REGULAR_EXPRESSION:
 # Debian 12 has CMake 3.25, without cmake_language(EXIT)).

@@ -324,7 +324,8 @@ struct Localizer::Impl {
     built = 0;
     auto made = backend.setLiveImage(gray, levels);
     if (!made.ok()) return made.error();
-    // Fewer than asked only where the image has no more levels: asking again would not add any.
+    // Fewer than asked only where no more levels exist (liveLevelsFor caps `levels` at the
+    // options' levels; a small image has fewer): asking again would not add any.
     built = std::max(levels, *made);
     out.live_ms += msSince(t0);
     return Status::success();

@@ -40,8 +40,9 @@ struct EdgeGradients {
 };
 
 /// The values of ranks rank_low <= rank_high (0-based, ascending) among `values`, all >= 0 (or
-/// NaN, which ranks above +inf): exactly the values a sort would put there, in about two linear
-/// passes. `values` must not be empty and rank_high < values.size(); `scratch` is working memory.
+/// NaN, which ranks above +inf; -0 counts as +0): for values without NaN, exactly the values a
+/// sort would put there, in about two linear passes. `values` must not be empty and rank_high < values.size();
+/// `scratch` is working memory.
 void selectTwoRanks(const std::vector<float>& values, size_t rank_low, size_t rank_high, std::vector<float>& scratch,
                     float& low, float& high);
 

@@ -199,12 +199,13 @@ struct LocalizerOptions {
   /// them with an unknown velocity (Localizer result prior_restarted). 0 = never.
   int restart_after_refusals = 2;
   double restart_min_score = 0.5;
-  /// Restart of the motion prior whatever the scores: after the prior has refused every tracked
-  /// pose for this long (seconds; poses at most motion_search_max_gap_s apart), it restarts at
-  /// the last one with an unknown velocity (prior_restarted). A prior that refuses alignments
-  /// frame after frame for that long has drifted (a wrong velocity or tilt taken from biased
-  /// poses, with a covariance too small to admit it) more often than the alignments are all
-  /// wrong, and an inertial stretch goes on drifting until max_inertial_s ends it anyway.
+  /// Restart of the motion prior whatever the scores: after the prior's gate has refused every
+  /// tracked pose for this long (seconds; poses at most motion_search_max_gap_s apart; a pose
+  /// refused only because a restarted prior takes verified poses alone does not count), it
+  /// restarts at the last one with an unknown velocity (prior_restarted). A prior that refuses
+  /// alignments frame after frame for that long has drifted (a wrong velocity or tilt taken from
+  /// biased poses, with a covariance too small to admit it) more often than the alignments are
+  /// all wrong, and an inertial stretch goes on drifting until max_inertial_s ends it anyway.
   /// 0 = never.
   double restart_after_refused_s = 0.3;
   /// With kAuto and an Accelerator: time the CPU and device live stages + alignment on the

@@ -30,8 +30,8 @@ class EdgeTrackingBackend {
   /// alignments will read (finest first; 0 or more than the options' levels: all of them); a
   /// backend may build more (the GPU backend builds all), and an alignment asked to start deeper
   /// than what was built starts at the deepest built level. Returns the number of levels built
-  /// (fewer than asked only where the image is too small for more). kInvalidArgument for a
-  /// wrong size or channel count; kGpuError when a device fails.
+  /// (fewer than asked only where the options' levels or the image's size allow no more).
+  /// kInvalidArgument for a wrong size or channel count; kGpuError when a device fails.
   virtual Result<int> setLiveImage(const ImageU8& gray, int levels) = 0;
 
   /// Makes `keyframe` the reference whose point lists later align() calls use; a GPU backend
