@@ -176,6 +176,25 @@ TEST(KeyframeDatabase, QueryRanksByHammingDistanceInsideTheRegion) {
   EXPECT_EQ(db.query(q, 3, SearchRegion{Eigen::Vector3d(0, 0, 0), std::numeric_limits<double>::infinity()}).size(), 3u);
 }
 
+TEST(KeyframeDatabase, PositionReachIsHalfTheDiagonalOfTheGridCell) {
+  KeyframeDatabase db(7, test::localizeCamera());
+  EXPECT_EQ(db.positionReach(), 0.0);
+  // A 6 x 5 x 4 grid 0.5 m apart, three headings at each position.
+  for (int x = 0; x < 6; ++x) {
+    for (int y = 0; y < 5; ++y) {
+      for (int z = 0; z < 4; ++z) {
+        for (int h = 0; h < 3; ++h) {
+          DatabaseKeyframe kf;
+          kf.T_world_camera.linear() = Eigen::AngleAxisd(h * 2.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+          kf.T_world_camera.translation() = Eigen::Vector3d(1.0 + 0.5 * x, -2.0 + 0.5 * y, 0.5 * z);
+          db.add(kf);
+        }
+      }
+    }
+  }
+  EXPECT_NEAR(db.positionReach(), 0.25 * std::sqrt(3.0), 1e-12);
+}
+
 TEST(KeyframeDatabase, BuiltViewsLieInFreeSpaceAndTheirOwnImageIsRetrievedFirst) {
   const auto& db = boxDatabase();
   ASSERT_TRUE(db);
@@ -269,7 +288,7 @@ TEST(Relocalization, GlobalInitializationFindsTheFirstPoseAndTracksOn) {
       if (i == 0) {
         ASSERT_EQ(r->state, TrackingState::kRelocalized) << "score " << r->verify_score;
         EXPECT_GT(r->relocalization_candidates, 0);
-        EXPECT_GE(r->verify_score, LocalizerOptions{}.relocalization.min_score);
+        EXPECT_GE(r->verify_score, LocalizerOptions{}.verification.min_score);
       } else {
         EXPECT_EQ(r->state, TrackingState::kTracking) << i;
       }
@@ -331,6 +350,33 @@ TEST(Relocalization, SearchesFindViewsAllRoundTheScene) {
   EXPECT_GE(found, 6) << "of 8";
 }
 
+TEST(Relocalization, APoseThatAlignmentsFromTwoKeyframesReachNeedsNoHighScore) {
+  // No pose can reach a score of 1 alone: without agreement nothing is found; with it, the
+  // searches find true poses (where two candidates' alignments meet) and nothing wrong.
+  int found_alone = 0, found_agreeing = 0;
+  for (int agreeing : {0, 2}) {
+    LocalizerOptions options;
+    options.keyframe_threading = KeyframeThreading::kSynchronous;
+    options.relocalization.min_score = 1.0;
+    options.relocalization.confident_score = 1.0;
+    options.relocalization.agreeing_candidates = agreeing;
+    auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
+    ASSERT_TRUE(created.ok()) << created.error().message;
+    ASSERT_TRUE((*created)->setKeyframeDatabase(asymmetricDatabase()).ok());
+    for (int i : {0, 90, 180, 270, 360, 450, 540, 630}) {
+      ASSERT_TRUE((*created)->startSearch(SearchRegion{test::localizeTruth(i).translation(), 1.0}).ok());
+      const Result<LocalizationResult> r = (*created)->localize(1, asymmetricFrame(i));
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      if (r->state != TrackingState::kRelocalized) continue;
+      EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i)), 0.04) << i;
+      EXPECT_LT(r->verify_score, 1.0);
+      ++(agreeing == 0 ? found_alone : found_agreeing);
+    }
+  }
+  EXPECT_EQ(found_alone, 0);
+  EXPECT_GE(found_agreeing, 4) << "of 8";
+}
+
 TEST(Relocalization, DatabaseAndSearchErrors) {
   auto localizer = relocalizer(KeyframeThreading::kSynchronous);
   ASSERT_TRUE(localizer);
@@ -361,6 +407,12 @@ TEST(Relocalization, DatabaseAndSearchErrors) {
   EXPECT_FALSE(Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
   bad = LocalizerOptions{};
   bad.relocalization.min_radius_m = NAN;
+  EXPECT_FALSE(Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
+  bad = LocalizerOptions{};
+  bad.relocalization.agreeing_candidates = -1;
+  EXPECT_FALSE(Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
+  bad = LocalizerOptions{};
+  bad.relocalization.agree_deg = NAN;
   EXPECT_FALSE(Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
 }
 

@@ -8,6 +8,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
@@ -162,6 +163,34 @@ std::vector<KeyframeCandidate> KeyframeDatabase::query(const GlobalDescriptor& d
   }
   std::sort_heap(out.begin(), out.end(), worse);
   return out;
+}
+
+double KeyframeDatabase::positionReach() const {
+  // Distinct positions (a position's views share it exactly).
+  std::vector<Eigen::Vector3d> positions;
+  for (size_t i = 0; i < keyframes_.size(); ++i) {
+    const Eigen::Vector3d p(positions_[3 * i], positions_[3 * i + 1], positions_[3 * i + 2]);
+    if (positions.empty() || positions.back() != p) positions.push_back(p);
+  }
+  std::sort(positions.begin(), positions.end(), [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  });
+  positions.erase(std::unique(positions.begin(), positions.end()), positions.end());
+  if (positions.size() < 2) return 0.0;
+  const size_t samples = std::min<size_t>(256, positions.size());
+  std::vector<double> nearest;
+  nearest.reserve(samples);
+  for (size_t s = 0; s < samples; ++s) {
+    const Eigen::Vector3d& p = positions[s * positions.size() / samples];
+    double best = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector3d& q : positions) {
+      const double d = (q - p).squaredNorm();
+      if (d > 0 && d < best) best = d;
+    }
+    nearest.push_back(std::sqrt(best));
+  }
+  std::nth_element(nearest.begin(), nearest.begin() + static_cast<std::ptrdiff_t>(nearest.size() / 2), nearest.end());
+  return 0.5 * std::sqrt(3.0) * nearest[nearest.size() / 2];
 }
 
 Status KeyframeDatabase::save(const std::string& path) const {

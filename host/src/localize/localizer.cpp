@@ -75,13 +75,17 @@ Status validateOptions(const LocalizerOptions& o) {
       l.shift_starts < 0 || l.shift_starts > 5 || !finiteIn(l.min_radius_m, 0.0, 1e7) ||
       !finiteIn(l.growth_m_s, 0.0, 1e4) || !finiteIn(l.max_radius_m, 0.0, 1e7) ||
       !finiteIn(l.min_contrast, 0.0, 255.0) || !finiteIn(l.min_score, 0.0, 1.0) ||
-      !finiteIn(l.confident_score, 0.0, 1.0) || !finiteIn(l.min_response, 0.0, 1.0)) {
-    return makeError(ErrorCode::kInvalidArgument,
-                     "Localizer: relocalization needs candidates and refined_probes in 1..100, rerank_candidates in "
-                     "0..1000, depth_steps in 0..5, "
-                     "depth_step in 0..1, after_untracked_frames >= 0, refinements "
-                     "in 0..10, shift_starts in 0..5, radii and growth >= 0, min_contrast in 0..255 and scores and "
-                     "min_response in 0..1");
+      !finiteIn(l.confident_score, 0.0, 1.0) || !finiteIn(l.min_response, 0.0, 1.0) || l.agreeing_candidates < 0 ||
+      l.agreeing_candidates > 100 || l.agreement_probes < 0 || l.agreement_probes > 100 ||
+      !finiteIn(l.agree_depth_fraction, 0.0, 1.0) || !finiteIn(l.agree_deg, 0.0, 180.0)) {
+    return makeError(
+        ErrorCode::kInvalidArgument,
+        "Localizer: relocalization needs candidates and refined_probes in 1..100, rerank_candidates in "
+        "0..1000, depth_steps in 0..5, "
+        "depth_step in 0..1, after_untracked_frames >= 0, refinements "
+        "in 0..10, shift_starts in 0..5, radii and growth >= 0, min_contrast in 0..255 and scores and "
+        "min_response in 0..1, agreeing_candidates and agreement_probes in 0..100, agree_depth_fraction in "
+        "0..1 and agree_deg in 0..180");
   }
   if (!finiteIn(o.max_point_motion_px, 0.0, 1e6)) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: max_point_motion_px must be in 0..1e6");
@@ -240,6 +244,7 @@ struct Localizer::Impl {
 
   // Relocalization and global initialization (RelocalizationOptions).
   std::shared_ptr<const KeyframeDatabase> database;
+  double database_reach_m = 0;  ///< KeyframeDatabase::positionReach: a search region grows by it.
   uint64_t model_fingerprint = 0;
   bool searching = false;                     ///< Global initialization in progress (startSearch).
   std::optional<SearchRegion> search_region;  ///< Its region (nullopt: the whole database).
@@ -560,7 +565,11 @@ struct Localizer::Impl {
                           TrackResult& found, LocalizationResult& out) {
     const RelocalizationOptions& o = options.relocalization;
     const auto t0 = SteadyClock::now();
-    out.search_radius_m = region ? region->radius_m : std::numeric_limits<double>::infinity();
+    // The keyframes nearest a camera at the region's border may lie outside it: the region grows
+    // by the reach of the database's grid.
+    std::optional<SearchRegion> searched = region;
+    if (searched) searched->radius_m += database_reach_m;
+    out.search_radius_m = searched ? searched->radius_m : std::numeric_limits<double>::infinity();
     Result<ImageU8> thumbnail = descriptorThumbnail(gray);
     if (!thumbnail.ok()) return thumbnail.error();
     if (thumbnailContrast(*thumbnail) < o.min_contrast) {
@@ -570,7 +579,7 @@ struct Localizer::Impl {
     Result<GlobalDescriptor> descriptor = globalDescriptor(gray);
     if (!descriptor.ok()) return descriptor.error();
     std::vector<KeyframeCandidate> candidates =
-        database->query(*descriptor, static_cast<size_t>(std::max(o.candidates, o.rerank_candidates)), region);
+        database->query(*descriptor, static_cast<size_t>(std::max(o.candidates, o.rerank_candidates)), searched);
     if (candidates.size() > static_cast<size_t>(o.candidates)) {
       // Re-ranking: each candidate rendered 160 pixels wide and compared with the live image by
       // the peak of their phase correlation (a shift of the whole view does not lower it).
@@ -623,6 +632,7 @@ struct Localizer::Impl {
     const EdgeTrackerOptions probe = probeOptions(deepest, 10);
     struct Probe {
       std::shared_ptr<const Keyframe> keyframe;
+      size_t candidate = 0;  ///< Database index of the keyframe it started from.
       Pose start = Pose::Identity();
       double inliers = 0;  ///< Above chance, on the deepest level.
     };
@@ -680,6 +690,7 @@ struct Localizer::Impl {
         if (!r.ok()) return r.error();
         Probe p;
         p.keyframe = keyframe;
+        p.candidate = c.index;
         p.start = r->T_world_camera;
         // Inliers beyond those a random pose would have (the scene's own edge density).
         p.inliers = (r->quality.inlier_ratio - r->quality.chance_inlier_ratio) * r->quality.points_in_image;
@@ -690,13 +701,40 @@ struct Localizer::Impl {
     // Stage 2: the best probes aligned fully, refined against keyframes rendered at the estimate
     // (the candidate's may be a metre off) and verified.
     std::sort(probes.begin(), probes.end(), [](const Probe& a, const Probe& b) { return a.inliers > b.inliers; });
-    if (probes.size() > static_cast<size_t>(o.refined_probes)) probes.resize(static_cast<size_t>(o.refined_probes));
-    std::shared_ptr<const Keyframe> best_keyframe;
-    double best_score = 0;
-    bool have = false;
+    // A refined pose verified at tracking's score; taken alone at min_score, or when alignments
+    // from agreeing_candidates different keyframes reached it.
+    struct Refined {
+      TrackResult track;
+      double score = 0;
+      std::shared_ptr<const Keyframe> keyframe;
+      size_t candidate = 0;
+    };
+    std::vector<Refined> refined;
+    auto agreeing = [&](const Refined& r) {
+      const double depth_m = r.keyframe->scene_depth_m;
+      std::vector<size_t> seen{r.candidate};
+      for (const Refined& other : refined) {
+        const Pose& a = r.track.T_world_camera;
+        const Pose& b = other.track.T_world_camera;
+        if (std::find(seen.begin(), seen.end(), other.candidate) == seen.end() &&
+            (a.translation() - b.translation()).norm() <= o.agree_depth_fraction * depth_m &&
+            rotationAngleDeg(a.linear().transpose() * b.linear()) <= o.agree_deg) {
+          seen.push_back(other.candidate);
+        }
+      }
+      return seen.size();
+    };
+    auto best = [&]() -> const Refined* {
+      const Refined* chosen = nullptr;
+      for (const Refined& r : refined) {
+        const bool taken = r.score >= o.min_score ||
+                           (o.agreeing_candidates > 0 && agreeing(r) >= static_cast<size_t>(o.agreeing_candidates));
+        if (taken && (!chosen || r.score > chosen->score)) chosen = &r;
+      }
+      return chosen;
+    };
     request.keep_gray = false;
-    for (const Probe& p : probes) {
-      if (best_score >= o.confident_score) break;
+    auto refine = [&](const Probe& p) -> Status {
       keyframes->restore(p.keyframe);
       VKLOC_TRY_STATUS(uploadKeyframe());
       Result<TrackResult> r = alignAt(p.start, std::min(1, deepest));
@@ -712,13 +750,35 @@ struct Localizer::Impl {
       }
       const double score =
           verificationScore(verificationFeatures(track, keyframes->current()->scene_depth_m), options.verification);
-      if (track.state != TrackingState::kTracking) continue;
-      if (score >= o.min_score && score > best_score) {
-        found = std::move(track);
-        best_score = score;
-        best_keyframe = keyframes->current();
-        have = true;
+      if (track.state == TrackingState::kTracking && score >= options.verification.min_score) {
+        refined.push_back(Refined{std::move(track), score, keyframes->current(), p.candidate});
       }
+      return Status::success();
+    };
+    // The best refined_probes probes; then, while a verified pose waits for agreement, the best
+    // probe of each other candidate (at most agreement_probes more) until one agrees.
+    std::vector<size_t> refined_candidates;
+    int refined_count = 0, extra = 0;
+    for (const Probe& p : probes) {
+      const Refined* b = best();
+      if (b && b->score >= o.confident_score) break;
+      if (refined_count >= o.refined_probes) {
+        if (b || refined.empty() || extra >= o.agreement_probes) break;
+        if (std::find(refined_candidates.begin(), refined_candidates.end(), p.candidate) != refined_candidates.end()) {
+          continue;
+        }
+        ++extra;
+      }
+      ++refined_count;
+      refined_candidates.push_back(p.candidate);
+      VKLOC_TRY_STATUS(refine(p));
+    }
+    const Refined* chosen = best();
+    const bool have = chosen != nullptr;
+    std::shared_ptr<const Keyframe> best_keyframe;
+    if (have) {
+      found = chosen->track;
+      best_keyframe = chosen->keyframe;
     }
     if (have) {
       keyframes->restore(best_keyframe);
@@ -1010,6 +1070,7 @@ Status Localizer::setKeyframeDatabase(std::shared_ptr<const KeyframeDatabase> da
     }
   }
   m.database = std::move(database);
+  m.database_reach_m = m.database ? m.database->positionReach() : 0.0;
   if (!m.database) m.searching = false;
   return Status::success();
 }

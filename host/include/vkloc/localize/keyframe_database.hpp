@@ -101,6 +101,12 @@ class KeyframeDatabase {
   std::vector<KeyframeCandidate> query(const GlobalDescriptor& descriptor, size_t k,
                                        const std::optional<SearchRegion>& region = std::nullopt) const;
 
+  /// How far a camera inside the grid of positions can be from the nearest one, metres: half the
+  /// diagonal of a grid cell whose side is the median distance from a position to its nearest
+  /// other one (estimated on up to 256 positions; 0 with fewer than two positions). A search
+  /// region grown by it holds the keyframes nearest a camera at its border.
+  double positionReach() const;
+
   /// Writes the file format above atomically. I/O errors as kIoError naming the path.
   Status save(const std::string& path) const;
   /// Reads a database. kNotFound / kIoError for a file that cannot be read; kMalformedInput

@@ -63,11 +63,13 @@ const char* localizerBackendName(LocalizerBackend backend);
 
 /// Relocalization and global initialization from a keyframe database (seed 001 sec. II-D;
 /// Localizer::setKeyframeDatabase). A search takes the database's keyframes nearest to the live
-/// image's descriptor in a region, renders a keyframe at each in turn, turns it by the image shift
-/// between that render and the live image (phase correlation: the rotation left), aligns from
-/// the deepest search level, refines against keyframes rendered at the estimate and keeps the
-/// best pose whose verification score reaches min_score. The keyframes' starts are first probed
-/// on the deepest level alone; only the best refined_probes are aligned fully.
+/// image's descriptor in a region (grown by KeyframeDatabase::positionReach), renders a keyframe
+/// at each in turn, turns it by the image shift between that render and the live image (phase
+/// correlation: the rotation left), aligns from the deepest search level, refines against
+/// keyframes rendered at the estimate and keeps the best pose whose verification score reaches
+/// min_score, or tracking's score when alignments from agreeing_candidates keyframes reached it.
+/// The keyframes' starts are first probed on the deepest level alone; only the best
+/// refined_probes are aligned fully.
 struct RelocalizationOptions {
   int candidates = 6;  ///< Database keyframes aligned per search, nearest descriptor first (1..100).
   /// When larger than `candidates`: this many nearest keyframes are rendered small (160 pixels
@@ -86,9 +88,20 @@ struct RelocalizationOptions {
   /// Frames whose thumbnail's contrast (thumbnailContrast) is below this have nothing to
   /// recognise (black, saturated, a blank wall): no search runs on them.
   double min_contrast = 4.0;
-  /// Verification score a relocalized pose needs: more than tracking's, as a search has many
-  /// chances to converge somewhere wrong (wrong places of a room score up to ~0.55).
-  double min_score = 0.6;
+  /// Verification score a relocalized pose needs on its own: more than tracking's, as a search
+  /// has many chances to converge somewhere wrong (wrong places of a room score up to ~0.6).
+  double min_score = 0.7;
+  /// Or a pose verified at tracking's score (VerificationOptions::min_score) that the alignments
+  /// from at least this many different database keyframes reached (0 = off): within
+  /// agree_depth_fraction x the scene depth and agree_deg of each other. True poses seen from few
+  /// edges score 0.2-0.55, and a wrong minimum that two candidates' alignments both reach and that
+  /// verifies too is rare.
+  int agreeing_candidates = 2;
+  double agree_depth_fraction = 0.01;
+  double agree_deg = 1.0;
+  /// While a verified pose waits for agreement after the refined_probes: the best probe of each
+  /// candidate not refined yet is refined too, at most this many (0..100).
+  int agreement_probes = 3;
   /// A search stops at a pose verified with this score.
   double confident_score = 0.75;
   /// Starts (of all candidates) aligned fully after the probes on the deepest level, most
