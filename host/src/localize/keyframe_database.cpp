@@ -168,9 +168,9 @@ std::vector<KeyframeCandidate> KeyframeDatabase::query(const GlobalDescriptor& d
 double KeyframeDatabase::positionReach() const {
   // Distinct positions (a position's views share it exactly).
   std::vector<Eigen::Vector3d> positions;
+  positions.reserve(keyframes_.size());
   for (size_t i = 0; i < keyframes_.size(); ++i) {
-    const Eigen::Vector3d p(positions_[3 * i], positions_[3 * i + 1], positions_[3 * i + 2]);
-    if (positions.empty() || positions.back() != p) positions.push_back(p);
+    positions.emplace_back(positions_[3 * i], positions_[3 * i + 1], positions_[3 * i + 2]);
   }
   std::sort(positions.begin(), positions.end(), [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);

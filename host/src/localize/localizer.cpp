@@ -775,13 +775,9 @@ struct Localizer::Impl {
     }
     const Refined* chosen = best();
     const bool have = chosen != nullptr;
-    std::shared_ptr<const Keyframe> best_keyframe;
     if (have) {
       found = chosen->track;
-      best_keyframe = chosen->keyframe;
-    }
-    if (have) {
-      keyframes->restore(best_keyframe);
+      keyframes->restore(chosen->keyframe);
       VKLOC_TRY_STATUS(uploadKeyframe());
     } else {
       keyframes->reset();
