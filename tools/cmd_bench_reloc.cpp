@@ -4,7 +4,9 @@
 // (a pose relocalized, verified and within the error goal; wrong poses accepted are counted
 // apart), and the query and recovery times. Optionally forced-loss trials: tracking with the IMU,
 // the images blacked out for a while or the camera made to jump, and the frames it takes to
-// relocalize after the first usable image.
+// relocalize after the first usable image; or global-initialization trials (seed 000 sec. V-A):
+// no pose at a seeded frame, a GPS-like prior drawn around the truth, and the frames and time to
+// the first verified pose.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -39,11 +41,14 @@ struct RelocBenchArgs {
   int candidates = RelocalizationOptions{}.candidates;
   int refined = RelocalizationOptions{}.refined_probes;
   int rerank = RelocalizationOptions{}.rerank_candidates;
+  bool top_first = RelocalizationOptions{}.top_candidate_first;
   std::string keyframes = "sync";
   int trials = 0;              ///< Forced-loss trials (0: none).
   std::string loss = "black";  ///< black | jump.
   double black_s = 1.0;        ///< Seconds of black frames.
   double jump_m = 5.0;         ///< Jump of the camera, metres.
+  double prior_sigma_m = 1.0;  ///< Start trials: the prior's 1-sigma per axis, metres.
+  int start_frames = 20;       ///< Start trials: frames searched before a start counts as failed.
   uint64_t seed = 1;
   bool no_vulkan = false;
   DeviceArgs device;
@@ -76,10 +81,15 @@ std::unique_ptr<Localizer> makeLocalizer(const Setup& s, const RelocBenchArgs& a
   options.relocalization.candidates = a.candidates;
   options.relocalization.refined_probes = a.refined;
   options.relocalization.rerank_candidates = a.rerank;
+  options.relocalization.top_candidate_first = a.top_first;
   auto localizer = take(Localizer::create(s.model, s.camera, options, s.accelerator));
   check(localizer->setKeyframeDatabase(s.db));
   return localizer;
 }
+
+void runQueries(const Setup& s, const RelocBenchArgs& a);
+void runLossTrials(const Setup& s, const RelocBenchArgs& a);
+void runStartTrials(const Setup& s, const RelocBenchArgs& a);
 
 void runRelocBench(const RelocBenchArgs& a) {
   Setup s;
@@ -114,7 +124,17 @@ void runRelocBench(const RelocBenchArgs& a) {
                 s.camera.height, descriptor_ms);
   }
 
-  // STAR's protocol: queries spread over the frames with ground truth.
+  if (a.queries > 0) runQueries(s, a);
+  if (a.trials <= 0) return;
+  if (a.loss == "start") {
+    runStartTrials(s, a);
+  } else {
+    runLossTrials(s, a);
+  }
+}
+
+/// STAR's protocol: queries spread over the frames with ground truth.
+void runQueries(const Setup& s, const RelocBenchArgs& a) {
   std::vector<size_t> frames;
   for (size_t i = 0; i < s.seq.images.size(); ++i) {
     if (groundTruthAt(s.seq.groundtruth, s.seq.images[i].t_ns)) frames.push_back(i);
@@ -190,8 +210,9 @@ void runRelocBench(const RelocBenchArgs& a) {
       "time median %.0f ms, p90 %.0f ms (%d candidates)\n",
       s.seq.name.c_str(), 100 * a.goal_fraction, a.goal_deg, 100.0 * recovered / nq, wrong, percentile(recover_ms, 0.5),
       percentile(recover_ms, 0.9), a.candidates);
+}
 
-  if (a.trials <= 0) return;
+void runLossTrials(const Setup& s, const RelocBenchArgs& a) {
   // Forced loss: track from a seeded start frame with the IMU; after 1 s the images go black for
   // black_s (or, for a jump, the frames skip ahead to where the camera is jump_m away); count
   // the frames from the first usable image to a verified pose again.
@@ -282,6 +303,89 @@ void runRelocBench(const RelocBenchArgs& a) {
       skipped > 0 ? fmt::format(" ({} trials skipped: no such jump or no ground truth)", skipped).c_str() : "");
 }
 
+/// Global initialization: at a seeded frame the localizer has no pose, only a prior position drawn
+/// from N(truth, prior_sigma^2 I) (searched within 3.37 sigma, 99 % of a 3-D Gaussian, at least
+/// the relocalization's smallest radius, as `vkloc track --global-init --prior-sigma` does); the
+/// frames run on with the IMU until a verified pose, then 5 more to catch a wrong one.
+void runStartTrials(const Setup& s, const RelocBenchArgs& a) {
+  const size_t tail = 5;  // frames after the first pose (as far as the sequence goes)
+  const size_t window = static_cast<size_t>(a.start_frames);
+  if (s.seq.images.size() < window) {
+    throw Failure{
+        fmt::format("the sequence ({} images) is shorter than --start-frames {}", s.seq.images.size(), a.start_frames)};
+  }
+  Xoshiro256 rng(a.seed);
+  size_t started = 0, within3 = 0, wrong_trials = 0, skipped = 0;
+  std::vector<double> frames_to_start, ms_to_start;
+  for (int trial = 0; trial < a.trials; ++trial) {
+    const size_t start =
+        std::min(s.seq.images.size() - window,
+                 static_cast<size_t>(rng.uniform(0.0, static_cast<double>(s.seq.images.size() - window + 1))));
+    const Eigen::Vector3d noise(rng.gaussian(), rng.gaussian(), rng.gaussian());
+    const std::optional<Pose> truth0 = groundTruthAt(s.seq.groundtruth, s.seq.images[start].t_ns);
+    if (!truth0) {
+      ++skipped;
+      continue;
+    }
+    auto tracker = makeLocalizer(s, a, true);
+    SearchRegion region;
+    region.center_world = truth0->translation() + a.prior_sigma_m * noise;
+    region.radius_m = std::max(3.37 * a.prior_sigma_m, RelocalizationOptions{}.min_radius_m);
+    check(tracker->startSearch(region));
+    // The IMU from one frame before the start (a filter that starts with the first pose).
+    size_t next_imu = static_cast<size_t>(std::lower_bound(s.seq.imu.begin(), s.seq.imu.end(),
+                                                           s.seq.images[start > 0 ? start - 1 : 0].t_ns,
+                                                           [](const ImuSample& m, int64_t t) { return m.t_ns < t; }) -
+                                          s.seq.imu.begin());
+    int first = -1;
+    bool accepted_wrong = false;
+    std::string wrong_what;
+    double ms = 0;
+    for (size_t f = 0; start + f < s.seq.images.size(); ++f) {
+      if (first < 0 && f >= window) break;
+      if (first >= 0 && f > static_cast<size_t>(first) + tail) break;
+      const size_t i = start + f;
+      const int64_t t_ns = s.seq.images[i].t_ns;
+      next_imu = feedSequenceImu(s.seq, next_imu, t_ns, *tracker);
+      const ImageU8 gray = take(readImageU8(s.seq.imagePath(i), 1));
+      const LocalizationResult r = take(tracker->localize(t_ns, gray));
+      if (first < 0) ms += r.total_ms;
+      const bool trusted = r.state == TrackingState::kTracking || r.state == TrackingState::kRelocalized;
+      const std::optional<Pose> truth = groundTruthAt(s.seq.groundtruth, t_ns);
+      if (!trusted || !truth) continue;
+      const double t_err = (r.T_world_camera.translation() - truth->translation()).norm();
+      const double r_err = rotationAngleDeg(r.T_world_camera.linear().transpose() * truth->linear());
+      const double depth = r.scene_depth_m > 0 ? r.scene_depth_m : 1.0;
+      if (!accepted_wrong && (t_err > a.goal_fraction * depth || r_err > a.goal_deg)) {
+        accepted_wrong = true;
+        wrong_what =
+            fmt::format(" ({:.3f} m, {:.2f} deg off at frame {}, {})", t_err, r_err, f + 1, trackingStateName(r.state));
+      }
+      if (first < 0) first = static_cast<int>(f);
+    }
+    const bool ok = first >= 0 && !accepted_wrong;
+    started += ok;
+    within3 += ok && first < 3;
+    wrong_trials += accepted_wrong;
+    frames_to_start.push_back(ok ? first + 1 : INFINITY);
+    if (ok) ms_to_start.push_back(ms);
+    std::fprintf(stderr,
+                 "bench reloc: start %d/%d: frame %zu, prior %.2f m off, first verified pose at frame %d%s (%.0f ms)\n",
+                 trial + 1, a.trials, start, a.prior_sigma_m * noise.norm(), first < 0 ? -1 : first + 1,
+                 accepted_wrong ? (", WRONG pose" + wrong_what).c_str() : "", ms);
+  }
+  const size_t done = frames_to_start.size();
+  const double pct = done > 0 ? 100.0 / static_cast<double>(done) : 0.0;
+  std::printf(
+      "%s: global initialization from a prior of sigma %.1f m (searched within %.2f m): a verified pose within %d "
+      "frames in %zu of %zu starts (%.1f %%; within 3 frames %.1f %%), starts with a wrong pose accepted %zu; frames "
+      "to the first pose median %.0f; search time to it median %.0f ms, p90 %.0f ms%s\n",
+      s.seq.name.c_str(), a.prior_sigma_m, std::max(3.37 * a.prior_sigma_m, RelocalizationOptions{}.min_radius_m),
+      a.start_frames, started, done, pct * static_cast<double>(started), pct * static_cast<double>(within3),
+      wrong_trials, percentile(frames_to_start, 0.5), percentile(ms_to_start, 0.5), percentile(ms_to_start, 0.9),
+      skipped > 0 ? fmt::format(" ({} starts skipped: no ground truth)", skipped).c_str() : "");
+}
+
 }  // namespace
 
 void addRelocBench(CLI::App& bench) {
@@ -290,8 +394,8 @@ void addRelocBench(CLI::App& bench) {
       "reloc", "Relocalization from a keyframe database on STAR's protocol, and forced-loss trials");
   reloc->add_option("--sequence", args->sequence, "Sequence folder with ground truth")->required();
   reloc->add_option("--db", args->db, "Keyframe database (vkloc keyframes build)")->required();
-  reloc->add_option("--queries", args->queries, "Query frames, spread over the sequence")
-      ->check(CLI::Range(1, 100000))
+  reloc->add_option("--queries", args->queries, "Query frames, spread over the sequence (0: none)")
+      ->check(CLI::Range(0, 100000))
       ->capture_default_str();
   reloc->add_option("--window", args->window_m, "Search window around the query's true position, metres")
       ->check(CLI::Range(0.0, 1e7))
@@ -302,21 +406,31 @@ void addRelocBench(CLI::App& bench) {
   reloc->add_option("--rerank", args->rerank, "Nearest keyframes rendered small and re-ranked (0: none)")
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
+  reloc->add_option("--top-first", args->top_first, "Align the best-ranked candidate's best probe first (true | false)")
+      ->capture_default_str();
   reloc->add_option("--refined", args->refined, "Probed starts aligned fully per search")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
   reloc->add_option("--keyframes", args->keyframes, "Keyframe threading: sync | worker")->capture_default_str();
-  reloc->add_option("--trials", args->trials, "Forced-loss trials (0: none)")
+  reloc->add_option("--trials", args->trials, "Forced-loss or start trials (0: none)")
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
-  reloc->add_option("--loss", args->loss, "Forced loss: black (frames) | jump (of the camera)")
-      ->check(CLI::IsMember({"black", "jump"}))
+  reloc
+      ->add_option("--loss", args->loss,
+                   "Trials: black (frames) | jump (of the camera) | start (global initialization from a prior)")
+      ->check(CLI::IsMember({"black", "jump", "start"}))
       ->capture_default_str();
   reloc->add_option("--black", args->black_s, "Seconds of black frames")
       ->check(CLI::Range(0.0, 1e3))
       ->capture_default_str();
   reloc->add_option("--jump", args->jump_m, "Jump of the camera, metres")
       ->check(CLI::Range(0.0, 1e6))
+      ->capture_default_str();
+  reloc->add_option("--prior-sigma", args->prior_sigma_m, "Start trials: the prior's 1-sigma per axis, metres")
+      ->check(CLI::Range(0.0, 1e4))
+      ->capture_default_str();
+  reloc->add_option("--start-frames", args->start_frames, "Start trials: frames searched before a start fails")
+      ->check(CLI::Range(1, 10000))
       ->capture_default_str();
   reloc->add_option("--seed", args->seed, "Seed of the trials' start frames")->capture_default_str();
   reloc->add_flag("--no-vulkan", args->no_vulkan, "Render keyframes with the CPU reference rasterizer");

@@ -40,6 +40,15 @@ run_ok("bench reloc" bench reloc --sequence ${seq} --db ${db} --queries 3 --no-v
 if(NOT out MATCHES "ms per 1000 keyframes" OR NOT out MATCHES "recovered \\(verified")
   message(FATAL_ERROR "bench reloc output lacks its figures:\n${out}")
 endif()
+# Global-initialization trials: seeded frames with no pose, a prior 0.3 m (1 sigma) off.
+run_ok("bench reloc start trials" bench reloc --sequence ${seq} --db ${db} --queries 0 --trials 2 --loss start
+       --prior-sigma 0.3 --start-frames 3 --no-vulkan)
+if(NOT out MATCHES "global initialization from a prior of sigma 0.3 m" OR NOT out MATCHES "in 2 of 2 starts"
+   OR out MATCHES "recovered \\(verified")
+  message(FATAL_ERROR "bench reloc start trials:\n${out}")
+endif()
+run_fails("start trials longer than the sequence" "shorter than --start-frames" bench reloc --sequence ${seq}
+          --db ${db} --queries 0 --trials 1 --loss start --start-frames 50 --no-vulkan)
 
 # Refused with one line: a truncated database, one built for another model, --global-init
 # without a database, a placement that would render too many views.

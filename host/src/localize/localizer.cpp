@@ -700,7 +700,15 @@ struct Localizer::Impl {
     }
     // Stage 2: the best probes aligned fully, refined against keyframes rendered at the estimate
     // (the candidate's may be a metre off) and verified.
-    std::sort(probes.begin(), probes.end(), [](const Probe& a, const Probe& b) { return a.inliers > b.inliers; });
+    std::stable_sort(probes.begin(), probes.end(),
+                     [](const Probe& a, const Probe& b) { return a.inliers > b.inliers; });
+    if (o.top_candidate_first && !probes.empty()) {
+      // The deepest level's few points rank a near start below wrong ones with more inliers:
+      // the best-ranked candidate's best probe goes first whatever its inliers.
+      const size_t top = candidates.front().index;
+      auto it = std::find_if(probes.begin(), probes.end(), [top](const Probe& p) { return p.candidate == top; });
+      if (it != probes.end()) std::rotate(probes.begin(), it, std::next(it));
+    }
     // A refined pose verified at tracking's score; taken alone at min_score, or when alignments
     // from agreeing_candidates different keyframes reached it.
     struct Refined {

@@ -107,6 +107,9 @@ struct RelocalizationOptions {
   /// Starts (of all candidates) aligned fully after the probes on the deepest level, most
   /// inliers above chance first (1..100).
   int refined_probes = 4;
+  /// The first of them is the best probe of the best-ranked candidate (the re-ranking's first,
+  /// else the nearest descriptor's), whatever its inliers.
+  bool top_candidate_first = true;
   /// Each start is also probed this many steps of depth_step x the candidate's scene depth
   /// forwards and backwards along its optical axis (a shift of the image cannot show that).
   int depth_steps = 1;
