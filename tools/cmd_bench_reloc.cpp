@@ -43,8 +43,8 @@ struct RelocBenchArgs {
   int rerank = RelocalizationOptions{}.rerank_candidates;
   bool top_first = RelocalizationOptions{}.top_candidate_first;
   std::string keyframes = "sync";
-  int trials = 0;              ///< Forced-loss trials (0: none).
-  std::string loss = "black";  ///< black | jump.
+  int trials = 0;              ///< Forced-loss or start trials (0: none).
+  std::string loss = "black";  ///< black | jump | start.
   double black_s = 1.0;        ///< Seconds of black frames.
   double jump_m = 5.0;         ///< Jump of the camera, metres.
   double prior_sigma_m = 1.0;  ///< Start trials: the prior's 1-sigma per axis, metres.
@@ -304,8 +304,7 @@ void runLossTrials(const Setup& s, const RelocBenchArgs& a) {
 }
 
 /// Global initialization: at a seeded frame the localizer has no pose, only a prior position drawn
-/// from N(truth, prior_sigma^2 I) (searched within 3.37 sigma, 99 % of a 3-D Gaussian, at least
-/// the relocalization's smallest radius, as `vkloc track --global-init --prior-sigma` does); the
+/// from N(truth, prior_sigma^2 I), searched as `vkloc track --global-init --prior-sigma` does; the
 /// frames run on with the IMU until a verified pose, then 5 more to catch a wrong one.
 void runStartTrials(const Setup& s, const RelocBenchArgs& a) {
   const size_t tail = 5;  // frames after the first pose (as far as the sequence goes)
@@ -314,6 +313,9 @@ void runStartTrials(const Setup& s, const RelocBenchArgs& a) {
     throw Failure{
         fmt::format("the sequence ({} images) is shorter than --start-frames {}", s.seq.images.size(), a.start_frames)};
   }
+  auto region_of = [&](const Eigen::Vector3d& center_world) {
+    return priorSearchRegion(center_world, a.prior_sigma_m, RelocalizationOptions{}.min_radius_m);
+  };
   Xoshiro256 rng(a.seed);
   size_t started = 0, within3 = 0, wrong_trials = 0, skipped = 0;
   std::vector<double> frames_to_start, ms_to_start;
@@ -328,10 +330,7 @@ void runStartTrials(const Setup& s, const RelocBenchArgs& a) {
       continue;
     }
     auto tracker = makeLocalizer(s, a, true);
-    SearchRegion region;
-    region.center_world = truth0->translation() + a.prior_sigma_m * noise;
-    region.radius_m = std::max(3.37 * a.prior_sigma_m, RelocalizationOptions{}.min_radius_m);
-    check(tracker->startSearch(region));
+    check(tracker->startSearch(region_of(truth0->translation() + a.prior_sigma_m * noise)));
     // The IMU from one frame before the start (a filter that starts with the first pose).
     size_t next_imu = static_cast<size_t>(std::lower_bound(s.seq.imu.begin(), s.seq.imu.end(),
                                                            s.seq.images[start > 0 ? start - 1 : 0].t_ns,
@@ -380,9 +379,9 @@ void runStartTrials(const Setup& s, const RelocBenchArgs& a) {
       "%s: global initialization from a prior of sigma %.1f m (searched within %.2f m): a verified pose within %d "
       "frames in %zu of %zu starts (%.1f %%; within 3 frames %.1f %%), starts with a wrong pose accepted %zu; frames "
       "to the first pose median %.0f; search time to it median %.0f ms, p90 %.0f ms%s\n",
-      s.seq.name.c_str(), a.prior_sigma_m, std::max(3.37 * a.prior_sigma_m, RelocalizationOptions{}.min_radius_m),
-      a.start_frames, started, done, pct * static_cast<double>(started), pct * static_cast<double>(within3),
-      wrong_trials, percentile(frames_to_start, 0.5), percentile(ms_to_start, 0.5), percentile(ms_to_start, 0.9),
+      s.seq.name.c_str(), a.prior_sigma_m, region_of(Eigen::Vector3d::Zero()).radius_m, a.start_frames, started, done,
+      pct * static_cast<double>(started), pct * static_cast<double>(within3), wrong_trials,
+      percentile(frames_to_start, 0.5), percentile(ms_to_start, 0.5), percentile(ms_to_start, 0.9),
       skipped > 0 ? fmt::format(" ({} starts skipped: no ground truth)", skipped).c_str() : "");
 }
 
@@ -391,7 +390,8 @@ void runStartTrials(const Setup& s, const RelocBenchArgs& a) {
 void addRelocBench(CLI::App& bench) {
   auto args = std::make_shared<RelocBenchArgs>();
   CLI::App* reloc = bench.add_subcommand(
-      "reloc", "Relocalization from a keyframe database on STAR's protocol, and forced-loss trials");
+      "reloc",
+      "Relocalization from a keyframe database on STAR's protocol, forced-loss and global-initialization trials");
   reloc->add_option("--sequence", args->sequence, "Sequence folder with ground truth")->required();
   reloc->add_option("--db", args->db, "Keyframe database (vkloc keyframes build)")->required();
   reloc->add_option("--queries", args->queries, "Query frames, spread over the sequence (0: none)")

@@ -172,26 +172,22 @@ void run(const TrackArgs& a) {
   }
   if (a.global_init) {
     if (a.db.empty()) throw Failure{"--global-init needs --db (vkloc keyframes build)"};
-    // The region: a GPS-like prior at the first image (prior.csv, or simulated from the ground
-    // truth with --prior-sigma), 3.37 sigma (99 % of a 3-D Gaussian) but at least the
-    // relocalization's smallest radius; else the whole database.
+    // The region of a GPS-like prior at the first image (prior.csv, or simulated from the ground
+    // truth with --prior-sigma); else the whole database.
     std::optional<SearchRegion> region;
     const int64_t t_first = seq.images[a.start_frame].t_ns;
     if (a.prior_sigma_m > 0) {
       const std::optional<Pose> truth = groundTruthAt(seq.groundtruth, t_first);
       if (!truth) throw Failure{"--prior-sigma: no ground truth at the first image to simulate a prior from"};
       Xoshiro256 rng(a.prior_seed);
-      region.emplace();
-      region->center_world =
-          truth->translation() + a.prior_sigma_m * Eigen::Vector3d(rng.gaussian(), rng.gaussian(), rng.gaussian());
-      region->radius_m = std::max(3.37 * a.prior_sigma_m, options.relocalization.min_radius_m);
+      region = priorSearchRegion(
+          truth->translation() + a.prior_sigma_m * Eigen::Vector3d(rng.gaussian(), rng.gaussian(), rng.gaussian()),
+          a.prior_sigma_m, options.relocalization.min_radius_m);
     } else if (!seq.priors.empty()) {
       auto near = std::min_element(seq.priors.begin(), seq.priors.end(), [&](const auto& x, const auto& y) {
         return std::llabs(x.t_ns - t_first) < std::llabs(y.t_ns - t_first);
       });
-      region.emplace();
-      region->center_world = near->p_world_body;
-      region->radius_m = std::max(3.37 * near->sigma.maxCoeff(), options.relocalization.min_radius_m);
+      region = priorSearchRegion(near->p_world_body, near->sigma.maxCoeff(), options.relocalization.min_radius_m);
     }
     check(localizer->startSearch(region));
     search_line +=

@@ -340,6 +340,13 @@ size_t feedSequenceImu(const Sequence& seq, size_t next, int64_t t_ns, Localizer
   return next;
 }
 
+SearchRegion priorSearchRegion(const Eigen::Vector3d& center_world, double sigma_m, double min_radius_m) {
+  SearchRegion region;
+  region.center_world = center_world;
+  region.radius_m = std::max(3.37 * sigma_m, min_radius_m);
+  return region;
+}
+
 PinholeCamera sequenceCamera(const Sequence& seq) {
   const LensCamera lens = take(lensCamera(seq.camera));
   if (!lens.isIdealPinhole()) {

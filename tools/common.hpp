@@ -13,6 +13,7 @@
 #include "vkloc/core/pose.hpp"
 #include "vkloc/engine/gpu.hpp"
 #include "vkloc/io/calibration.hpp"
+#include "vkloc/localize/keyframe_database.hpp"
 #include "vkloc/localize/localizer.hpp"
 #include "vkloc/model/model.hpp"
 
@@ -129,6 +130,9 @@ void setSequenceInertial(const Sequence& seq, bool use_imu, LocalizerOptions& op
 /// t_ns; returns the index of the first reading not given. A bad reading is skipped with a
 /// warning on stderr (the others are kept).
 size_t feedSequenceImu(const Sequence& seq, size_t next, int64_t t_ns, Localizer& localizer);
+/// The region a GPS-like prior at `center_world` with 1-sigma `sigma_m` (per axis, metres) is
+/// searched in: 3.37 sigma (99 % of a 3-D Gaussian), at least `min_radius_m`.
+SearchRegion priorSearchRegion(const Eigen::Vector3d& center_world, double sigma_m, double min_radius_m);
 /// Runs `vkloc track` with these arguments (used by `vkloc demo`); throws Failure on errors.
 void runTrackArguments(const std::vector<std::string>& arguments);
 
