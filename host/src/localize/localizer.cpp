@@ -248,10 +248,11 @@ struct Localizer::Impl {
   uint64_t model_fingerprint = 0;
   bool searching = false;                     ///< Global initialization in progress (startSearch).
   std::optional<SearchRegion> search_region;  ///< Its region (nullopt: the whole database).
-  bool relocalizing = false;                  ///< A relocalization search is aligning (no point filter).
-  int untracked = 0;                          ///< Frames in a row not tracked.
-  int failed_searches = 0;                    ///< Searches since the last tracked frame that found nothing.
-  std::optional<int64_t> last_tracked_t_ns;   ///< Time of the last tracked frame.
+  bool confirming = false;    ///< Its pose waits for the next frame (RelocalizationOptions::confirm_start).
+  bool relocalizing = false;  ///< A relocalization search is aligning (no point filter).
+  int untracked = 0;          ///< Frames in a row not tracked.
+  int failed_searches = 0;    ///< Searches since the last tracked frame that found nothing.
+  std::optional<int64_t> last_tracked_t_ns;  ///< Time of the last tracked frame.
   std::optional<ImuSample> last_imu;  ///< Newest IMU reading taken (given again when the prior restarts: restartPrior).
   std::optional<int64_t> last_relocalized_t_ns;  ///< Time of the last relocalized frame.
 
@@ -874,6 +875,10 @@ struct Localizer::Impl {
     applyBridge(motion->bridge(t_ns, prediction, guess), out);
     keyframes->frameNotTracked();  // the next frame aligns against a keyframe made at its guess
     ++untracked;
+    if (confirming) {  // the search's pose waits for a frame to confirm it
+      out.state = TrackingState::kInitializing;
+      out.confirming = true;
+    }
     if (const Keyframe* current = keyframes->current().get()) {
       out.keyframe_id = current->id;
       out.keyframe_age_frames = frame_index - current->request.frame_index;
@@ -1039,6 +1044,7 @@ void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vec
   m.refusals = {};
   m.refused_stretch = {};
   m.searching = false;
+  m.confirming = false;
   m.search_region.reset();
   m.untracked = 0;
   m.failed_searches = 0;
@@ -1234,7 +1240,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
 
   // 0. A frame with nothing to align (black, saturated, uniform): reported at once; the motion
   // prior bridges it (the IMU keeps running), and no alignment, search or relocalization runs.
-  if (m.searching && T_world_camera_guess) m.searching = false;
+  if (T_world_camera_guess) m.searching = m.confirming = false;
   double image_contrast = 0;
   if (m.options.image_content.min_contrast > 0) {
     Result<ImageContentCheck> content = checkImageContent(gray, m.options.image_content);
@@ -1262,6 +1268,11 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     if (*searched) {
       m.searching = false;
       m.adoptRelocalized(found, t_ns, gray, std::nullopt, previous_t_ns, out);
+      if (m.options.relocalization.confirm_start) {
+        m.confirming = true;
+        out.state = TrackingState::kInitializing;
+        out.confirming = true;
+      }
     }
     out.total_ms = msSince(t_start);
     return out;
@@ -1449,6 +1460,43 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     applyBridge(m.motion->bridge(t_ns, prediction, guess), out);
   }
 
+  // 5a. Global initialization's pose on probation (confirm_start): this frame, tracked from it
+  // and taken, confirms it; otherwise the pose is dropped and this frame is searched again in
+  // the prior's region (as the frames before the search found it).
+  bool confirmed = false;
+  if (m.confirming) {
+    m.confirming = false;
+    if (out.state == TrackingState::kTracking && !out.visual_rejected) {
+      confirmed = true;  // reported kRelocalized below
+    } else {
+      out.state = TrackingState::kInitializing;
+      m.motion->reset(std::nullopt, std::nullopt);
+      m.last_camera_pose.reset();
+      m.tracked_since_reset = false;
+      m.last_tracked_t_ns.reset();
+      m.last_tracked_gray.reset();
+      m.last_relocalized_t_ns.reset();
+      m.refusals = {};
+      m.refused_stretch = {};
+      m.untracked = 0;
+      m.failed_searches = 0;
+      TrackResult found;
+      Result<bool> searched = m.relocalize(gray, t_ns, m.search_region, found, out);
+      if (!searched.ok()) return searched.error();
+      if (*searched) {
+        m.adoptRelocalized(found, t_ns, gray, std::nullopt, std::nullopt, out);
+        m.confirming = true;
+        out.state = TrackingState::kInitializing;
+        out.confirming = true;
+      } else {
+        m.searching = true;
+      }
+      if (m.worker()) m.last_frame_waited = true;
+      out.total_ms = msSince(t_start);
+      return out;
+    }
+  }
+
   // 5b. Relocalization (with a keyframe database): a frame not tracked after
   // after_untracked_frames in a row is searched for around the prediction, in a region that
   // grows with the time since the last tracked frame, the prediction's uncertainty and every
@@ -1477,6 +1525,8 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
       }
     }
   }
+
+  if (confirmed) out.state = TrackingState::kRelocalized;
 
   // 6. Worker mode: the next keyframe, at the pose the camera will have when it is ready.
   if (m.worker()) {

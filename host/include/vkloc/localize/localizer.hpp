@@ -104,6 +104,16 @@ struct RelocalizationOptions {
   int agreement_probes = 3;
   /// A search stops at a pose verified with this score.
   double confident_score = 0.75;
+  /// Global initialization (Localizer::startSearch): the pose a search finds is confirmed by the
+  /// next frame before it is reported. That frame tracks from it (IMU-propagated) and must be
+  /// tracked and taken by the filter, verified as any tracked frame; it is then the kRelocalized
+  /// frame, and the search's frame stays kInitializing with LocalizationResult::confirming set.
+  /// A pose the next frame does not confirm is dropped and that frame is searched anew in the
+  /// prior's region. A region only a prior bounds (metres wide, no motion history) holds places
+  /// that look alike from one view (a look-alike corner of a room verified at 0.92) whose
+  /// alignment does not survive the next frame's motion. Searches after a loss are not delayed:
+  /// the filter's prediction bounds them, and recovering on the first usable frame counts.
+  bool confirm_start = true;
   /// Starts (of all candidates) aligned fully after the probes on the deepest level, most
   /// inliers above chance first (1..100).
   int refined_probes = 4;
@@ -285,6 +295,9 @@ struct LocalizationResult {
   int search_level = 0;          ///< Deepest pyramid level the prior's uncertainty made the alignment start at.
   int motion_search_probes = 0;  ///< Start translations probed by the motion search (0: none ran).
   double image_shift_px = 0;     ///< Image shift the motion search measured, pixels (0: none).
+  /// Global initialization found a pose on this frame that the next frame confirms
+  /// (RelocalizationOptions::confirm_start): state is kInitializing, T_world_camera that pose.
+  bool confirming = false;
   /// Database keyframes aligned by a relocalization search on this frame (0: none ran), the
   /// radius of its region (metres; infinite: the whole database) and its time (ms, in total_ms).
   int relocalization_candidates = 0;
@@ -354,7 +367,8 @@ class Localizer {
   Status setKeyframeDatabase(std::shared_ptr<const KeyframeDatabase> database);
   /// Global initialization: forgets the pose and searches the following frames in `region` (a
   /// GPS-like prior; the whole database when nullopt) until a pose is verified (state
-  /// kRelocalized), then tracks on. Frames before are kInitializing. localize() then needs no
+  /// kRelocalized; with RelocalizationOptions::confirm_start on the frame after the search's,
+  /// which confirms it), then tracks on. Frames before are kInitializing. localize() then needs no
   /// guess. kInvalidArgument without a database or for a non-finite region.
   Status startSearch(const std::optional<SearchRegion>& region);
 
