@@ -110,18 +110,8 @@ std::unique_ptr<Localizer> makeLocalizer(KeyframeThreading threading) {
 /// IMU readings of the scene's camera circle (localizeTruth: rotating rigidly about the world z
 /// axis at 0.5 deg per frame), body = camera frame, gravity -z, from t0 to t1 at 200 Hz.
 void feedImu(Localizer& localizer, int64_t t0_ns, int64_t t1_ns) {
-  const double w = 0.5 * M_PI / 180.0 / (kFrameNs * 1e-9);  // rad/s about world z
-  for (int64_t t = t0_ns; t <= t1_ns; t += 5'000'000) {
-    const double i = static_cast<double>(t) / kFrameNs;  // fractional frame index
-    const double a = -0.9 + 0.5 * M_PI / 180.0 * i;
-    const Pose T = test::cameraLookingAt({2.0 * std::cos(a), 2.0 * std::sin(a), 1.2}, {0.0, 0.0, 0.15});
-    const Eigen::Vector3d accel_world(-w * w * 2.0 * std::cos(a), -w * w * 2.0 * std::sin(a), 0.0);
-    ImuSample s;
-    s.t_ns = t;
-    s.gyro_body = T.linear().transpose() * Eigen::Vector3d(0, 0, w);
-    s.accel_body = T.linear().transpose() * (accel_world - Eigen::Vector3d(0, 0, -9.81));
-    EXPECT_TRUE(localizer.addImu(s).ok());
-  }
+  for (int64_t t = t0_ns; t <= t1_ns; t += 5'000'000)
+    EXPECT_TRUE(localizer.addImu(test::localizeImuAt(t, kFrameNs)).ok());
 }
 
 /// Frames with nothing to align, one after another, then the scene again.

@@ -275,13 +275,15 @@ std::unique_ptr<Localizer> relocalizer(KeyframeThreading threading) {
   return std::move(created).value();
 }
 
-/// A search (startSearch) on frame i and, when it found a pose, the frame after, which confirms
-/// it (RelocalizationOptions::confirm_start): that frame's result, else the search's.
-Result<LocalizationResult> searchAndConfirm(Localizer& localizer, int i) {
-  Result<LocalizationResult> r = localizer.localize(1, asymmetricFrame(i));
-  if (!r.ok() || !r->confirming) return r;
-  return localizer.localize(50'000'001, asymmetricFrame(i + 1));
-}
+/// The circling camera's IMU readings (200 Hz), each given once: upTo(t) gives those up to t.
+struct ImuFeed {
+  Localizer& localizer;
+  int64_t next_t_ns = 0;
+  void upTo(int64_t t_ns) {
+    for (; next_t_ns <= t_ns; next_t_ns += 5'000'000)
+      EXPECT_TRUE(localizer.addImu(test::localizeImuAt(next_t_ns)).ok());
+  }
+};
 
 TEST(Relocalization, GlobalInitializationFindsTheFirstPoseAndTracksOn) {
   for (KeyframeThreading threading : {KeyframeThreading::kSynchronous, KeyframeThreading::kWorkerThread}) {
@@ -290,11 +292,13 @@ TEST(Relocalization, GlobalInitializationFindsTheFirstPoseAndTracksOn) {
     // A GPS-like prior 0.4 m off, searched within 1.2 m.
     const Eigen::Vector3d prior = test::localizeTruth(0).translation() + Eigen::Vector3d(0.3, -0.2, 0.2);
     ASSERT_TRUE(localizer->startSearch(SearchRegion{prior, 1.2}).ok());
+    ImuFeed imu{*localizer};
     for (int i = 0; i < 6; ++i) {
+      imu.upTo(i * 50'000'000);
       const Result<LocalizationResult> r = localizer->localize(i * 50'000'000, asymmetricFrame(i));
       ASSERT_TRUE(r.ok()) << r.error().message;
       if (i == 0) {
-        // The search's pose waits for the next frame to confirm it (confirm_start).
+        // The search's pose waits for the next frame to confirm it (confirm_start, with the IMU).
         ASSERT_EQ(r->state, TrackingState::kInitializing) << "score " << r->verify_score;
         EXPECT_TRUE(r->confirming);
         EXPECT_GT(r->relocalization_candidates, 0);
@@ -316,7 +320,9 @@ TEST(Relocalization, AStartPoseTheNextFrameDoesNotConfirmIsDroppedAndThatFrameSe
   auto localizer = relocalizer(KeyframeThreading::kSynchronous);
   ASSERT_TRUE(localizer);
   ASSERT_TRUE(localizer->startSearch(SearchRegion{test::localizeTruth(0).translation(), 1.0}).ok());
-  Result<LocalizationResult> r = localizer->localize(50'000'000, asymmetricFrame(0));
+  ImuFeed imu{*localizer};
+  imu.upTo(0);
+  Result<LocalizationResult> r = localizer->localize(0, asymmetricFrame(0));
   ASSERT_TRUE(r.ok()) << r.error().message;
   ASSERT_EQ(r->state, TrackingState::kInitializing);
   ASSERT_TRUE(r->confirming);
@@ -331,17 +337,17 @@ TEST(Relocalization, AStartPoseTheNextFrameDoesNotConfirmIsDroppedAndThatFrameSe
   for (int y = 0; y < 240; ++y) {
     for (int x = 0; x < 320; ++x) blocks.data[static_cast<size_t>(y) * 320 + x] = levels[(y / 8) * 40 + x / 8];
   }
-  r = localizer->localize(100'000'000, blocks);
+  imu.upTo(50'000'000);
+  r = localizer->localize(50'000'000, blocks);
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_EQ(r->state, TrackingState::kInitializing) << "score " << r->verify_score;
   EXPECT_FALSE(r->confirming);
   EXPECT_GT(r->relocalization_candidates, 0) << "the frame that refused the pose is searched";
-  // Images of the prior's region again: found and confirmed anew.
-  int64_t t = 100'000'000;
+  // The scene again: found and confirmed anew.
   bool relocalized = false;
   for (int i = 2; i < 8 && !relocalized; ++i) {
-    t += 50'000'000;
-    r = localizer->localize(t, asymmetricFrame(i));
+    imu.upTo(i * 50'000'000);
+    r = localizer->localize(i * 50'000'000, asymmetricFrame(i));
     ASSERT_TRUE(r.ok()) << r.error().message;
     EXPECT_NE(r->state, TrackingState::kTracking) << "no pose is tracked before one is confirmed";
     if (r->state == TrackingState::kRelocalized) {
@@ -350,6 +356,18 @@ TEST(Relocalization, AStartPoseTheNextFrameDoesNotConfirmIsDroppedAndThatFrameSe
     }
   }
   EXPECT_TRUE(relocalized);
+}
+
+TEST(Relocalization, WithoutTheImuAStartPoseIsReportedAtOnce) {
+  // No IMU to carry the pose to the next frame: confirm_start does not apply.
+  auto localizer = relocalizer(KeyframeThreading::kSynchronous);
+  ASSERT_TRUE(localizer);
+  ASSERT_TRUE(localizer->startSearch(SearchRegion{test::localizeTruth(0).translation(), 1.0}).ok());
+  const Result<LocalizationResult> r = localizer->localize(0, asymmetricFrame(0));
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  EXPECT_EQ(r->state, TrackingState::kRelocalized);
+  EXPECT_FALSE(r->confirming);
+  EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(0)), 5e-3);
 }
 
 TEST(Relocalization, RecoversAfterBlackFramesAndAJumpWithoutSearchingBlackOnes) {
@@ -393,12 +411,12 @@ TEST(Relocalization, SearchesFindViewsAllRoundTheScene) {
   for (int i : {0, 90, 180, 270, 360, 450, 540, 630}) {
     // STAR's protocol: a search window around the true position.
     ASSERT_TRUE(localizer->startSearch(SearchRegion{test::localizeTruth(i).translation(), 1.0}).ok());
-    const Result<LocalizationResult> r = searchAndConfirm(*localizer, i);
+    const Result<LocalizationResult> r = localizer->localize(1, asymmetricFrame(i));
     ASSERT_TRUE(r.ok()) << r.error().message;
     if (r->state == TrackingState::kInitializing) continue;
     ASSERT_EQ(r->state, TrackingState::kRelocalized);
     // The pose goal of the bench: 2 % of the ~2 m scene depth.
-    EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i + 1)), 0.04) << i;
+    EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i)), 0.04) << i;
     ++found;
   }
   EXPECT_GE(found, 6) << "of 8";
@@ -419,10 +437,10 @@ TEST(Relocalization, APoseThatAlignmentsFromTwoKeyframesReachNeedsNoHighScore) {
     ASSERT_TRUE((*created)->setKeyframeDatabase(asymmetricDatabase()).ok());
     for (int i : {0, 90, 180, 270, 360, 450, 540, 630}) {
       ASSERT_TRUE((*created)->startSearch(SearchRegion{test::localizeTruth(i).translation(), 1.0}).ok());
-      const Result<LocalizationResult> r = searchAndConfirm(**created, i);
+      const Result<LocalizationResult> r = (*created)->localize(1, asymmetricFrame(i));
       ASSERT_TRUE(r.ok()) << r.error().message;
       if (r->state != TrackingState::kRelocalized) continue;
-      EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i + 1)), 0.04) << i;
+      EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i)), 0.04) << i;
       EXPECT_LT(r->verify_score, 1.0);
       ++(agreeing == 0 ? found_alone : found_agreeing);
     }

@@ -9,6 +9,7 @@
 
 #include "support/analytic_scenes.hpp"
 #include "vkloc/core/se3.hpp"
+#include "vkloc/fusion/sensors.hpp"
 #include "vkloc/render/cpu_renderer.hpp"
 
 namespace vkloc::test {
@@ -19,6 +20,22 @@ inline PinholeCamera localizeCamera() { return PinholeCamera{260.0, 260.0, 159.5
 inline Pose localizeTruth(int i) {
   const double a = -0.9 + 0.5 * M_PI / 180.0 * i;
   return cameraLookingAt({2.0 * std::cos(a), 2.0 * std::sin(a), 1.2}, {0.0, 0.0, 0.15});
+}
+
+/// The ideal IMU reading (body = camera) at t_ns of the camera of localizeTruth at one frame per
+/// frame_ns: it circles the box at 0.5 deg per frame looking at a point on the world z axis, so
+/// it turns about z at that rate and accelerates towards the axis. World z up, gravity -9.81 m/s^2.
+inline ImuSample localizeImuAt(int64_t t_ns, int64_t frame_ns = 50'000'000) {
+  const double w = 0.5 * M_PI / 180.0 / (static_cast<double>(frame_ns) * 1e-9);  // rad/s about world z
+  const double a = -0.9 + w * static_cast<double>(t_ns) * 1e-9;
+  const Eigen::Matrix3d R_world_camera =
+      cameraLookingAt({2.0 * std::cos(a), 2.0 * std::sin(a), 1.2}, {0.0, 0.0, 0.15}).linear();
+  const Eigen::Vector3d accel_world = -w * w * Eigen::Vector3d(2.0 * std::cos(a), 2.0 * std::sin(a), 0.0);
+  ImuSample s;
+  s.t_ns = t_ns;
+  s.gyro_body = R_world_camera.transpose() * Eigen::Vector3d(0, 0, w);
+  s.accel_body = R_world_camera.transpose() * (accel_world - Eigen::Vector3d(0, 0, -9.81));
+  return s;
 }
 
 /// Gray images of frames 0..n-1 (cached per process: the CPU renderer takes a while).

@@ -27,22 +27,9 @@ std::unique_ptr<Localizer> makeLocalizer(KeyframeThreading threading) {
   return created.ok() ? std::move(created).value() : nullptr;
 }
 
-// The ideal IMU (200 Hz, body = camera) of localizeTruth's camera: it circles the box at 10 deg/s
-// looking at a point on the world z axis, so it turns about z at that rate and accelerates
-// towards the axis. World z up, gravity -9.81 m/s^2 along it.
+// The ideal IMU (200 Hz, body = camera) of localizeTruth's camera.
 const Eigen::Vector3d kGravityWorld(0, 0, -9.81);
-ImuSample circlingImuAt(int64_t t_ns) {
-  const double w = 0.5 * M_PI / 180.0 / (static_cast<double>(kFrameNs) * 1e-9);  // rad/s
-  const double t = static_cast<double>(t_ns) * 1e-9, a = -0.9 + w * t;
-  const Eigen::Matrix3d R_world_camera =
-      test::cameraLookingAt({2.0 * std::cos(a), 2.0 * std::sin(a), 1.2}, {0.0, 0.0, 0.15}).linear();
-  const Eigen::Vector3d acc_world = -w * w * Eigen::Vector3d(2.0 * std::cos(a), 2.0 * std::sin(a), 0.0);
-  ImuSample s;
-  s.t_ns = t_ns;
-  s.gyro_body = R_world_camera.transpose() * Eigen::Vector3d(0, 0, w);
-  s.accel_body = R_world_camera.transpose() * (acc_world - kGravityWorld);
-  return s;
-}
+ImuSample circlingImuAt(int64_t t_ns) { return test::localizeImuAt(t_ns, kFrameNs); }
 
 /// Frames first..first+frames-1 of the box scene; with_imu: each after the circling camera's IMU
 /// readings from the first frame's time up to its own; pace: wall time between frames, as a

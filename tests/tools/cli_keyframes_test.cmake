@@ -27,9 +27,11 @@ endif()
 file(STRINGS ${WORK}/gi/traj_frames.csv rows)
 list(GET rows 0 header)
 list(GET rows 1 first)
-if(NOT header MATCHES "relocalization_candidates,search_radius_m,relocalization_ms,front_ms,view_tilt_deg,image_content,image_contrast,pose_filtered$" OR NOT first MATCHES
-                                                                                         "^[0-9]+,relocalized,")
-  message(FATAL_ERROR "frames log: header '${header}', first frame '${first}'")
+list(GET rows 2 second)
+# The search's pose (first frame) is reported once the next frame, IMU-propagated, confirms it.
+if(NOT header MATCHES "relocalization_candidates,search_radius_m,relocalization_ms,front_ms,view_tilt_deg,image_content,image_contrast,pose_filtered$"
+   OR NOT first MATCHES "^[0-9]+,initializing," OR NOT second MATCHES "^[0-9]+,relocalized,")
+  message(FATAL_ERROR "frames log: header '${header}', first frame '${first}', second '${second}'")
 endif()
 json_number(median ${WORK}/gi/traj_report/track.json translation_median_m)
 if(median GREATER 0.05)

@@ -1268,7 +1268,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     if (*searched) {
       m.searching = false;
       m.adoptRelocalized(found, t_ns, gray, std::nullopt, previous_t_ns, out);
-      if (m.options.relocalization.confirm_start) {
+      if (m.options.relocalization.confirm_start && m.last_imu) {
         m.confirming = true;
         out.state = TrackingState::kInitializing;
         out.confirming = true;
