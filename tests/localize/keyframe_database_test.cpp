@@ -413,6 +413,15 @@ TEST(Relocalization, SearchesFindViewsAllRoundTheScene) {
     ASSERT_TRUE(localizer->startSearch(SearchRegion{test::localizeTruth(i).translation(), 1.0}).ok());
     const Result<LocalizationResult> r = localizer->localize(1, asymmetricFrame(i));
     ASSERT_TRUE(r.ok()) << r.error().message;
+    // The search's first candidate: a keyframe of the database in the window.
+    ASSERT_GE(r->relocalization_top_keyframe, 0);
+    ASSERT_LT(static_cast<size_t>(r->relocalization_top_keyframe), asymmetricDatabase()->size());
+    EXPECT_LT((asymmetricDatabase()
+                   ->keyframes()[static_cast<size_t>(r->relocalization_top_keyframe)]
+                   .T_world_camera.translation() -
+               test::localizeTruth(i).translation())
+                  .norm(),
+              1.0 + asymmetricDatabase()->positionReach() + 1e-9);
     if (r->state == TrackingState::kInitializing) continue;
     ASSERT_EQ(r->state, TrackingState::kRelocalized);
     // The pose goal of the bench: 2 % of the ~2 m scene depth.

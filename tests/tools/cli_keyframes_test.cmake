@@ -39,7 +39,8 @@ if(median GREATER 0.05)
 endif()
 
 run_ok("bench reloc" bench reloc --sequence ${seq} --db ${db} --queries 3 --no-vulkan)
-if(NOT out MATCHES "ms per 1000 keyframes" OR NOT out MATCHES "recovered \\(verified")
+if(NOT out MATCHES "ms per 1000 keyframes" OR NOT out MATCHES "recovered \\(verified"
+   OR NOT out MATCHES "retrieval after the re-ranking")
   message(FATAL_ERROR "bench reloc output lacks its figures:\n${out}")
 endif()
 # Global-initialization trials: seeded frames with no pose, a prior 0.3 m (1 sigma) off.

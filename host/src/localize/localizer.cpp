@@ -609,6 +609,7 @@ struct Localizer::Impl {
       out.relocalization_ms = msSince(t0);
       return false;
     }
+    out.relocalization_top_keyframe = static_cast<int64_t>(candidates.front().index);
     keyframes->reset();
     uploaded_id = 0;
     const int deepest = std::max(0, std::min(options.max_search_level, options.live.levels - 1));

@@ -305,6 +305,10 @@ struct LocalizationResult {
   /// Database keyframes aligned by a relocalization search on this frame (0: none ran), the
   /// radius of its region (metres; infinite: the whole database) and its time (ms, in total_ms).
   int relocalization_candidates = 0;
+  /// Database index of the keyframe the search ranked first (nearest descriptor, re-ranked by
+  /// the phase correlation when RelocalizationOptions::rerank_candidates is on; -1: no search
+  /// ran or none lay in the region): the retrieval's answer, before any alignment.
+  int64_t relocalization_top_keyframe = -1;
   double search_radius_m = 0;
   double relocalization_ms = 0;
   double scene_depth_m = 0;  ///< Median depth of the keyframe render's surfaces, metres (0: none seen).
