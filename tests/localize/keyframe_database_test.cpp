@@ -358,6 +358,43 @@ TEST(Relocalization, AStartPoseTheNextFrameDoesNotConfirmIsDroppedAndThatFrameSe
   EXPECT_TRUE(relocalized);
 }
 
+TEST(Relocalization, AStartPoseWaitsThroughABlackFrameAndAGuessOrNoDatabaseEndsTheWait) {
+  const ImageU8 black(320, 240, 1, 0);
+  for (int ending : {0, 1, 2}) {  // the scene confirms it; a guess is given; the database is taken away
+    auto localizer = relocalizer(KeyframeThreading::kSynchronous);
+    ASSERT_TRUE(localizer);
+    ASSERT_TRUE(localizer->startSearch(SearchRegion{test::localizeTruth(0).translation(), 1.0}).ok());
+    ImuFeed imu{*localizer};
+    imu.upTo(0);
+    Result<LocalizationResult> r = localizer->localize(0, asymmetricFrame(0));
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    ASSERT_TRUE(r->confirming);
+    imu.upTo(50'000'000);
+    r = localizer->localize(50'000'000, black);  // nothing to confirm it with: it waits
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_EQ(r->state, TrackingState::kInitializing);
+    EXPECT_TRUE(r->confirming);
+    imu.upTo(100'000'000);
+    if (ending == 0) {
+      r = localizer->localize(100'000'000, asymmetricFrame(2));
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      EXPECT_EQ(r->state, TrackingState::kRelocalized);
+      EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(2)), 5e-3);
+    } else if (ending == 1) {
+      r = localizer->localize(100'000'000, asymmetricFrame(2), test::localizeTruth(2));
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      EXPECT_EQ(r->state, TrackingState::kTracking) << "a guess given ends the search and its wait";
+      EXPECT_FALSE(r->confirming);
+    } else {
+      ASSERT_TRUE(localizer->setKeyframeDatabase(nullptr).ok());
+      r = localizer->localize(100'000'000, black);
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      EXPECT_FALSE(r->confirming);
+      EXPECT_NE(r->state, TrackingState::kRelocalized);
+    }
+  }
+}
+
 TEST(Relocalization, WithoutTheImuAStartPoseIsReportedAtOnce) {
   // No IMU to carry the pose to the next frame: confirm_start does not apply.
   auto localizer = relocalizer(KeyframeThreading::kSynchronous);

@@ -1082,7 +1082,7 @@ Status Localizer::setKeyframeDatabase(std::shared_ptr<const KeyframeDatabase> da
   }
   m.database = std::move(database);
   m.database_reach_m = m.database ? m.database->positionReach() : 0.0;
-  if (!m.database) m.searching = false;
+  if (!m.database) m.searching = m.confirming = false;
   return Status::success();
 }
 
@@ -1467,10 +1467,9 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   bool confirmed = false;
   if (m.confirming) {
     m.confirming = false;
-    if (out.state == TrackingState::kTracking && !out.visual_rejected) {
+    if (out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted) {
       confirmed = true;  // reported kRelocalized below
     } else {
-      out.state = TrackingState::kInitializing;
       m.motion->reset(std::nullopt, std::nullopt);
       m.last_camera_pose.reset();
       m.tracked_since_reset = false;
@@ -1481,20 +1480,33 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
       m.refused_stretch = {};
       m.untracked = 0;
       m.failed_searches = 0;
-      TrackResult found;
-      Result<bool> searched = m.relocalize(gray, t_ns, m.search_region, found, out);
-      if (!searched.ok()) return searched.error();
-      if (*searched) {
-        m.adoptRelocalized(found, t_ns, gray, std::nullopt, std::nullopt, out);
-        m.confirming = true;
-        out.state = TrackingState::kInitializing;
-        out.confirming = true;
-      } else {
-        m.searching = true;
+      // The frame is reported as the searches before the pose was found were: no pose, only
+      // the work done on it.
+      LocalizationResult searched_out;
+      searched_out.t_ns = t_ns;
+      searched_out.image_contrast = out.image_contrast;
+      searched_out.state = TrackingState::kInitializing;
+      searched_out.render_ms = out.render_ms;
+      searched_out.reference_ms = out.reference_ms;
+      searched_out.live_ms = out.live_ms;
+      searched_out.align_ms = out.align_ms;
+      searched_out.reference_rendered = out.reference_rendered;
+      if (m.database) {
+        TrackResult found;
+        Result<bool> searched = m.relocalize(gray, t_ns, m.search_region, found, searched_out);
+        if (!searched.ok()) return searched.error();
+        if (*searched) {
+          m.adoptRelocalized(found, t_ns, gray, std::nullopt, std::nullopt, searched_out);
+          m.confirming = true;
+          searched_out.state = TrackingState::kInitializing;
+          searched_out.confirming = true;
+        } else {
+          m.searching = true;
+        }
       }
       if (m.worker()) m.last_frame_waited = true;
-      out.total_ms = msSince(t_start);
-      return out;
+      searched_out.total_ms = msSince(t_start);
+      return searched_out;
     }
   }
 
