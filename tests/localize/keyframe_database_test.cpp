@@ -316,16 +316,25 @@ TEST(Relocalization, GlobalInitializationFindsTheFirstPoseAndTracksOn) {
   }
 }
 
-TEST(Relocalization, AStartPoseTheNextFrameDoesNotConfirmIsDroppedAndThatFrameSearched) {
+/// A synchronous relocalizer whose global search (around frame 0's position, 1 m) found frame
+/// 0's pose on frame 0, with the IMU given up to it: the pose waits for the next frame.
+std::unique_ptr<Localizer> waitingOnFrame0() {
   auto localizer = relocalizer(KeyframeThreading::kSynchronous);
+  if (!localizer) return nullptr;
+  EXPECT_TRUE(localizer->startSearch(SearchRegion{test::localizeTruth(0).translation(), 1.0}).ok());
+  EXPECT_TRUE(localizer->addImu(test::localizeImuAt(0)).ok());
+  const Result<LocalizationResult> r = localizer->localize(0, asymmetricFrame(0));
+  EXPECT_TRUE(r.ok()) << r.error().message;
+  if (!r.ok()) return nullptr;
+  EXPECT_EQ(r->state, TrackingState::kInitializing);
+  EXPECT_TRUE(r->confirming);
+  return r->confirming ? std::move(localizer) : nullptr;
+}
+
+TEST(Relocalization, AStartPoseTheNextFrameDoesNotConfirmIsDroppedAndThatFrameSearched) {
+  auto localizer = waitingOnFrame0();
   ASSERT_TRUE(localizer);
-  ASSERT_TRUE(localizer->startSearch(SearchRegion{test::localizeTruth(0).translation(), 1.0}).ok());
-  ImuFeed imu{*localizer};
-  imu.upTo(0);
-  Result<LocalizationResult> r = localizer->localize(0, asymmetricFrame(0));
-  ASSERT_TRUE(r.ok()) << r.error().message;
-  ASSERT_EQ(r->state, TrackingState::kInitializing);
-  ASSERT_TRUE(r->confirming);
+  ImuFeed imu{*localizer, 5'000'000};
   // The next image shows nothing of the scene (blocks of random gray: edges everywhere): tracked
   // from the first pose it cannot verify, so that pose is never reported, and the image is
   // searched for in the prior's region (where it matches nothing).
@@ -338,7 +347,7 @@ TEST(Relocalization, AStartPoseTheNextFrameDoesNotConfirmIsDroppedAndThatFrameSe
     for (int x = 0; x < 320; ++x) blocks.data[static_cast<size_t>(y) * 320 + x] = levels[(y / 8) * 40 + x / 8];
   }
   imu.upTo(50'000'000);
-  r = localizer->localize(50'000'000, blocks);
+  Result<LocalizationResult> r = localizer->localize(50'000'000, blocks);
   ASSERT_TRUE(r.ok()) << r.error().message;
   EXPECT_EQ(r->state, TrackingState::kInitializing) << "score " << r->verify_score;
   EXPECT_FALSE(r->confirming);
@@ -361,16 +370,11 @@ TEST(Relocalization, AStartPoseTheNextFrameDoesNotConfirmIsDroppedAndThatFrameSe
 TEST(Relocalization, AStartPoseWaitsThroughABlackFrameAndAGuessOrNoDatabaseEndsTheWait) {
   const ImageU8 black(320, 240, 1, 0);
   for (int ending : {0, 1, 2}) {  // the scene confirms it; a guess is given; the database is taken away
-    auto localizer = relocalizer(KeyframeThreading::kSynchronous);
+    auto localizer = waitingOnFrame0();
     ASSERT_TRUE(localizer);
-    ASSERT_TRUE(localizer->startSearch(SearchRegion{test::localizeTruth(0).translation(), 1.0}).ok());
-    ImuFeed imu{*localizer};
-    imu.upTo(0);
-    Result<LocalizationResult> r = localizer->localize(0, asymmetricFrame(0));
-    ASSERT_TRUE(r.ok()) << r.error().message;
-    ASSERT_TRUE(r->confirming);
+    ImuFeed imu{*localizer, 5'000'000};
     imu.upTo(50'000'000);
-    r = localizer->localize(50'000'000, black);  // nothing to confirm it with: it waits
+    Result<LocalizationResult> r = localizer->localize(50'000'000, black);  // nothing to confirm it with: it waits
     ASSERT_TRUE(r.ok()) << r.error().message;
     EXPECT_EQ(r->state, TrackingState::kInitializing);
     EXPECT_TRUE(r->confirming);
