@@ -854,6 +854,32 @@ struct Localizer::Impl {
     out.keyframe_age_frames = frame_index - keyframe.request.frame_index;
   }
 
+  /// Forgets what tracking learnt since the last pose was taken (the motion prior's pose is
+  /// reset by the caller): as at a start.
+  void forgetTrack() {
+    tracked_since_reset = false;
+    last_tracked_gray.reset();
+    refusals = {};
+    refused_stretch = {};
+    untracked = 0;
+    failed_searches = 0;
+    last_tracked_t_ns.reset();
+    last_relocalized_t_ns.reset();
+    last_camera_pose.reset();
+  }
+
+  /// Takes the pose global initialization's search found (adoptRelocalized); with the IMU and
+  /// RelocalizationOptions::confirm_start it waits for the next frame to confirm it.
+  void adoptStartPose(const TrackResult& found, int64_t t_ns, const ImageU8& gray, std::optional<int64_t> previous_t_ns,
+                      LocalizationResult& out) {
+    adoptRelocalized(found, t_ns, gray, std::nullopt, previous_t_ns, out);
+    if (options.relocalization.confirm_start && last_imu) {
+      confirming = true;
+      out.state = TrackingState::kInitializing;
+      out.confirming = true;
+    }
+  }
+
   /// A frame with nothing to align (checkImageContent): no alignment or search; the motion prior
   /// bridges it (kInertial with the IMU, else kLost; kInitializing while a search is on). It
   /// counts as a lost frame: a later frame that is not tracked is searched for at once.
@@ -1040,19 +1066,11 @@ void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vec
   m.keyframes->reset();
   m.uploaded_id = 0;
   m.last_t_ns.reset();
-  m.tracked_since_reset = false;
-  m.last_tracked_gray.reset();
-  m.refusals = {};
-  m.refused_stretch = {};
+  m.forgetTrack();
   m.searching = false;
   m.confirming = false;
   m.search_region.reset();
-  m.untracked = 0;
-  m.failed_searches = 0;
-  m.last_tracked_t_ns.reset();
   m.last_imu.reset();
-  m.last_relocalized_t_ns.reset();
-  m.last_camera_pose.reset();
   if (m.front && isValidPose(T_world_camera)) {
     // The motion prior works on the camera; its interface on the view of the pose given.
     m.view_prior->setView(m.front->viewExtrinsic(T_world_camera));
@@ -1268,12 +1286,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     if (!searched.ok()) return searched.error();
     if (*searched) {
       m.searching = false;
-      m.adoptRelocalized(found, t_ns, gray, std::nullopt, previous_t_ns, out);
-      if (m.options.relocalization.confirm_start && m.last_imu) {
-        m.confirming = true;
-        out.state = TrackingState::kInitializing;
-        out.confirming = true;
-      }
+      m.adoptStartPose(found, t_ns, gray, previous_t_ns, out);
     }
     out.total_ms = msSince(t_start);
     return out;
@@ -1471,15 +1484,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
       confirmed = true;  // reported kRelocalized below
     } else {
       m.motion->reset(std::nullopt, std::nullopt);
-      m.last_camera_pose.reset();
-      m.tracked_since_reset = false;
-      m.last_tracked_t_ns.reset();
-      m.last_tracked_gray.reset();
-      m.last_relocalized_t_ns.reset();
-      m.refusals = {};
-      m.refused_stretch = {};
-      m.untracked = 0;
-      m.failed_searches = 0;
+      m.forgetTrack();
       // The frame is reported as the searches before the pose was found were: no pose, only
       // the work done on it.
       LocalizationResult searched_out;
@@ -1496,10 +1501,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
         Result<bool> searched = m.relocalize(gray, t_ns, m.search_region, found, searched_out);
         if (!searched.ok()) return searched.error();
         if (*searched) {
-          m.adoptRelocalized(found, t_ns, gray, std::nullopt, std::nullopt, searched_out);
-          m.confirming = true;
-          searched_out.state = TrackingState::kInitializing;
-          searched_out.confirming = true;
+          m.adoptStartPose(found, t_ns, gray, std::nullopt, searched_out);
         } else {
           m.searching = true;
         }
