@@ -122,7 +122,8 @@ void ViewArgs::add(CLI::App& app) {
       ->capture_default_str();
   app.add_option("--view-size", size, "View size 'WxH', pixels (default: the lens image's)");
   app.add_option("--view-hfov", hfov_deg,
-                 "View's horizontal field of view, degrees (default: a pinhole lens's own, else 90)");
+                 "View's horizontal field of view, degrees (default: a pinhole lens's own focal length, so a smaller "
+                 "--view-size is a central crop; else 90)");
   app.add_option("--view-pitch", pitch_deg, "Stabilised view: axis angle below the horizon, degrees (90 = down)")
       ->capture_default_str();
 }

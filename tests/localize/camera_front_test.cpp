@@ -170,6 +170,52 @@ TEST(CameraFront, GridTableIsCloseToTheExactOne) {
   EXPECT_LT(worst, 0.05) << "px";
 }
 
+TEST(CameraFront, ASmallerViewOfAPinholeLensIsTheCentralCropAtItsScale) {
+  const PinholeCamera K = test::localizeCamera();
+  ViewOptions o;
+  o.width = K.width - 40;
+  o.height = K.height - 20;
+  for (const bool distorted : {false, true}) {
+    LensCamera lens = radtanLens();
+    if (!distorted) lens.k = {};
+    auto front = CameraFront::create(lens, o);
+    ASSERT_TRUE(front.ok()) << front.error().message;
+    const PinholeCamera& view = (*front)->view();
+    EXPECT_EQ(view.fx, K.fx);
+    EXPECT_EQ(view.fy, K.fy);
+    EXPECT_EQ(view.cx, K.cx - 20);
+    EXPECT_EQ(view.cy, K.cy - 10);
+    EXPECT_FALSE((*front)->identity());
+    EXPECT_GT((*front)->validFraction(), 0.999) << distorted;
+    if (distorted) continue;
+    // An ideal lens: the view is the lens image's central pixels, unchanged.
+    const ImageU8 img = randomImage(K.width, K.height, 5);
+    ImageU8 crop;
+    ASSERT_TRUE((*front)->remap(img, Eigen::Matrix3d::Identity(), crop).ok());
+    ASSERT_EQ(crop.width, o.width);
+    size_t differ = 0;
+    for (int y = 0; y < o.height; ++y) {
+      for (int x = 0; x < o.width; ++x) {
+        differ +=
+            crop.data[static_cast<size_t>(y) * o.width + x] != img.data[static_cast<size_t>(y + 10) * K.width + x + 20];
+      }
+    }
+    EXPECT_EQ(differ, 0u);
+  }
+  // A field of view asked for overrides the lens's scale; a stabilised view keeps the scale
+  // with its principal point at its centre.
+  o.hfov_deg = 60;
+  auto wide = CameraFront::create(radtanLens(), o);
+  ASSERT_TRUE(wide.ok());
+  EXPECT_NEAR((*wide)->view().fx, 0.5 * o.width / std::tan(M_PI / 6), 1e-9);
+  o.hfov_deg = 0;
+  o.kind = ViewKind::kStabilised;
+  auto stabilised = CameraFront::create(radtanLens(), o);
+  ASSERT_TRUE(stabilised.ok());
+  EXPECT_EQ((*stabilised)->view().fx, K.fx);
+  EXPECT_EQ((*stabilised)->view().cx, 0.5 * (o.width - 1));
+}
+
 TEST(CameraFront, BadInputIsAClearError) {
   auto front = CameraFront::create(radtanLens(), ViewOptions{});
   ASSERT_TRUE(front.ok());

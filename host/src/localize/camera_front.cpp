@@ -56,11 +56,17 @@ Result<std::unique_ptr<CameraFront>> CameraFront::create(const LensCamera& lens,
   front->up_world_ = options.up_world.normalized();
   const int w = options.width > 0 ? options.width : lens.intrinsics.width;
   const int h = options.height > 0 ? options.height : lens.intrinsics.height;
-  const bool keep_intrinsics = lens.model == LensModel::kPinhole && options.hfov_deg == 0 &&
-                               options.kind == ViewKind::kUndistorted && w == lens.intrinsics.width &&
-                               h == lens.intrinsics.height;
+  const PinholeCamera& K = lens.intrinsics;
+  const bool pinhole_focal = lens.model == LensModel::kPinhole && options.hfov_deg == 0;
+  const bool keep_intrinsics = pinhole_focal && options.kind == ViewKind::kUndistorted && w == K.width && h == K.height;
   if (keep_intrinsics) {
-    front->view_ = lens.intrinsics;
+    front->view_ = K;
+  } else if (pinhole_focal && options.kind == ViewKind::kUndistorted && w <= K.width && h <= K.height) {
+    // A smaller view of a pinhole lens: the central crop at the lens's own scale (a wider field
+    // would magnify the lens image and reach past it; --view-hfov asks for one).
+    front->view_ = PinholeCamera{K.fx, K.fy, K.cx - 0.5 * (K.width - w), K.cy - 0.5 * (K.height - h), w, h};
+  } else if (pinhole_focal) {
+    front->view_ = PinholeCamera{K.fx, K.fy, 0.5 * (w - 1), 0.5 * (h - 1), w, h};
   } else {
     const double hfov = options.hfov_deg > 0 ? options.hfov_deg : 90.0;
     const double f = 0.5 * w / std::tan(0.5 * hfov * M_PI / 180.0);

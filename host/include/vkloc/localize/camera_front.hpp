@@ -38,8 +38,9 @@ struct ViewOptions {
   /// View size, pixels; 0: the lens image's size.
   int width = 0;
   int height = 0;
-  /// Horizontal field of view of the view, degrees (1..170); 0: a pinhole lens keeps its own
-  /// focal lengths and principal point (size permitting), any other lens gets 90.
+  /// Horizontal field of view of the view, degrees (1..170); 0: a pinhole lens (distorted or
+  /// not) keeps its own focal lengths (an undistorted view of its size keeps its principal point
+  /// too, a smaller one is the central crop of it), any other lens gets 90.
   double hfov_deg = 0;
   /// kStabilised: angle of the view's optical axis below the horizon, degrees (-89..90; 90 = down).
   double pitch_deg = 0;
