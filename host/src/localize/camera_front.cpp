@@ -58,12 +58,12 @@ Result<std::unique_ptr<CameraFront>> CameraFront::create(const LensCamera& lens,
   const int h = options.height > 0 ? options.height : lens.intrinsics.height;
   const PinholeCamera& K = lens.intrinsics;
   const bool pinhole_focal = lens.model == LensModel::kPinhole && options.hfov_deg == 0;
-  const bool keep_intrinsics = pinhole_focal && options.kind == ViewKind::kUndistorted && w == K.width && h == K.height;
-  if (keep_intrinsics) {
-    front->view_ = K;
-  } else if (pinhole_focal && options.kind == ViewKind::kUndistorted && w <= K.width && h <= K.height) {
-    // A smaller view of a pinhole lens: the central crop at the lens's own scale (a wider field
-    // would magnify the lens image and reach past it; --view-hfov asks for one).
+  // An undistorted view of a pinhole lens no larger than it: the central crop at the lens's own
+  // scale (its own intrinsics at its size; a wider field would magnify the lens image and reach
+  // past it, --view-hfov asks for one).
+  const bool crop = pinhole_focal && options.kind == ViewKind::kUndistorted && w <= K.width && h <= K.height;
+  const bool keep_intrinsics = crop && w == K.width && h == K.height;
+  if (crop) {
     front->view_ = PinholeCamera{K.fx, K.fy, K.cx - 0.5 * (K.width - w), K.cy - 0.5 * (K.height - h), w, h};
   } else if (pinhole_focal) {
     front->view_ = PinholeCamera{K.fx, K.fy, 0.5 * (w - 1), 0.5 * (h - 1), w, h};
