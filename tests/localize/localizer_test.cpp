@@ -149,6 +149,37 @@ TEST(Localizer, ARestartedFilterPredictsFromTheImuAtOnce) {
   EXPECT_LE(*restarted_at, 4);
 }
 
+// A restarted filter keeps its velocity with restart_sigma_velocity_m_s as the sigma, so the next
+// frame is predicted within a few centimetres; with 0 it restarts at an unknown velocity, at rest
+// with a sigma of scene depths per second (a drone so restarted drifts off at its speed).
+TEST(Localizer, ARestartedFilterKeepsItsVelocityLoosened) {
+  double next_sigma_m[2] = {0, 0};
+  for (int keep = 0; keep < 2; ++keep) {
+    SCOPED_TRACE(keep);
+    auto localizer = makeEkfLocalizer([&](LocalizerOptions& o) { o.restart_sigma_velocity_m_s = keep ? 1.0 : 0.0; });
+    ASSERT_TRUE(localizer);
+    const Pose T0 = test::localizeTruth(0);
+    localizer->reset(T0, Eigen::Vector3d(T0.linear() * Eigen::Vector3d(1.0, 0, 0)));
+    const auto results = run(*localizer, 12, 0, true);
+    ASSERT_EQ(results.size(), 12u);
+    std::optional<int> restarted_at;
+    for (int i = 0; i < 12; ++i) {
+      if (results[static_cast<size_t>(i)].prior_restarted && !restarted_at) restarted_at = i;
+    }
+    ASSERT_TRUE(restarted_at.has_value());
+    ASSERT_LT(*restarted_at, 11);
+    const LocalizationResult& next = results[static_cast<size_t>(*restarted_at + 1)];
+    EXPECT_EQ(next.state, TrackingState::kTracking);
+    EXPECT_LT(test::translationError(next.T_world_camera, test::localizeTruth(*restarted_at + 1)), 3e-3);
+    next_sigma_m[keep] = next.inertial_sigma_m;
+  }
+  // 1 m/s over 50 ms on each axis (sigma_m bounds the three: sqrt(3) x 5 cm), against 2 scene
+  // depths per second.
+  EXPECT_GT(next_sigma_m[1], 0.0);
+  EXPECT_LT(next_sigma_m[1], 0.1);
+  EXPECT_GT(next_sigma_m[0], 2.0 * next_sigma_m[1]) << next_sigma_m[0];
+}
+
 // The same wrong-velocity start with the score rule off: a filter that refuses every tracked pose
 // for restart_after_refused_s restarts at the last one whatever its score, and tracks from there;
 // with that rule off too it refuses on, the frames bridged by the IMU alone.
@@ -327,6 +358,8 @@ TEST(Localizer, BadInputIsAnErrorNotACrash) {
   EXPECT_TRUE(refused([](LocalizerOptions& o) { o.restart_min_score = -0.5; }));
   EXPECT_TRUE(refused([](LocalizerOptions& o) { o.restart_after_refused_s = -1.0; }));
   EXPECT_TRUE(refused([](LocalizerOptions& o) { o.restart_after_refused_s = INFINITY; }));
+  EXPECT_TRUE(refused([](LocalizerOptions& o) { o.restart_sigma_velocity_m_s = -1.0; }));
+  EXPECT_TRUE(refused([](LocalizerOptions& o) { o.restart_sigma_velocity_m_s = NAN; }));
   EXPECT_FALSE(refused([](LocalizerOptions& o) { o.motion_search_steps = 0; }));  // off is valid
   EXPECT_FALSE(Localizer::create(Model{}, test::localizeCamera(), LocalizerOptions{}, nullptr).ok());
   EXPECT_FALSE(parseLocalizerBackend("gpu").ok());

@@ -289,6 +289,35 @@ TEST(EkfPrior, PredictsFromTheFirstFrameGatesBridgesAndOutputsAtTheImuRate) {
   }
 }
 
+// The filter's prediction carries its velocity and that velocity's sigma (what a restart keeps);
+// a reset with a velocity starts the filter at it, tight (0.1 m/s) unless a sigma is given.
+TEST(EkfPrior, PredictionsCarryTheVelocityAndAResetTakesItsSigma) {
+  const Flight f = flight();
+  const int64_t t0 = f.trajectory.startNs();
+  const TrajectoryState start = f.trajectory.evaluate(t0);
+  const Matrix6d visual = Matrix6d::Identity() * 1e-6;
+  for (const double sigma_v : {0.0, 2.0}) {
+    SCOPED_TRACE(sigma_v);
+    EkfPrior prior(flightAiding(), MotionModel::kConstantVelocity);
+    prior.reset(start.T_world_body, start.v_world_body, sigma_v);
+    size_t next = 0;
+    feedImu(prior, f.imu, next, t0);
+    prior.setSceneDepth(10.0);
+    prior.addVisualPose(t0, start.T_world_body, visual);
+    const auto p = prior.predict(t0 + kFrameNs / 10);
+    ASSERT_TRUE(p.has_value());
+    ASSERT_TRUE(p->v_world_body.has_value());
+    EXPECT_LT((*p->v_world_body - start.v_world_body).norm(), 0.05);
+    // Started at the given sigma, hardly grown over 5 ms.
+    EXPECT_NEAR(p->sigma_velocity_m_s, sigma_v > 0 ? sigma_v : 0.1, 0.02);
+  }
+  ConstantVelocityPrior plain;
+  plain.reset(start.T_world_body, start.v_world_body, 2.0);
+  const auto q = plain.predict(t0 + kFrameNs);
+  ASSERT_TRUE(q.has_value());
+  EXPECT_FALSE(q->v_world_body.has_value());
+}
+
 // Frames delivered late (the IMU fed 60 ms past each frame): the prediction, the gate and the
 // update are at the frame's time, so the truth passes and the filter ends where it would have
 // with the frames on time; a pose 1 m off is still refused.

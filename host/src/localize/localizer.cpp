@@ -63,10 +63,10 @@ Status validateOptions(const LocalizerOptions& o) {
                      "motion_search_confident_score in 0..1");
   }
   if (o.restart_after_refusals < 0 || !finiteIn(o.restart_min_score, 0.0, 1.0) ||
-      !finiteIn(o.restart_after_refused_s, 0.0, 1e4)) {
+      !finiteIn(o.restart_after_refused_s, 0.0, 1e4) || !finiteIn(o.restart_sigma_velocity_m_s, 0.0, 1e3)) {
     return makeError(ErrorCode::kInvalidArgument,
-                     "Localizer: need restart_after_refusals >= 0, restart_min_score in 0..1 and "
-                     "restart_after_refused_s in 0..1e4");
+                     "Localizer: need restart_after_refusals >= 0, restart_min_score in 0..1, "
+                     "restart_after_refused_s in 0..1e4 and restart_sigma_velocity_m_s in 0..1e3");
   }
   const RelocalizationOptions& l = o.relocalization;
   if (l.candidates < 1 || l.candidates > 100 || l.rerank_candidates < 0 || l.rerank_candidates > 1000 ||
@@ -802,8 +802,9 @@ struct Localizer::Impl {
   /// only after one: the newest reading is given again, so the pose the prior takes next starts
   /// the filter now. (Without it the frames after the restart would be predicted by constant
   /// velocity, and lost ones neither bridged nor searched, until a frame is tracked again.)
-  void restartPrior(const Pose& T_world_camera, const std::optional<Eigen::Vector3d>& v_world, int64_t t_ns) {
-    motion->reset(T_world_camera, v_world);
+  void restartPrior(const Pose& T_world_camera, const std::optional<Eigen::Vector3d>& v_world, int64_t t_ns,
+                    double sigma_velocity_m_s = 0) {
+    motion->reset(T_world_camera, v_world, sigma_velocity_m_s);
     if (last_imu && last_imu->t_ns <= t_ns) (void)motion->addImu(*last_imu);
   }
 
@@ -1402,9 +1403,10 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // velocity taken from a poor first fix, a bias, poorly verified poses it took): after
   // restart_after_refusals of them in a row (refusalCountsAgainstPrior) it restarts at this pose.
   // So it does, whatever the scores, after refusing every tracked pose for
-  // restart_after_refused_s. Either way with an unknown velocity that the next poses pin down,
-  // as at a start: the velocity between two poses 1/20 s apart carries their errors divided by
-  // that interval (1 cm each: 0.3 m/s), and a filter started with it tightly drifts off at once.
+  // restart_after_refused_s. Either way the filter's velocity goes on with a loosened sigma
+  // (restart_sigma_velocity_m_s) for the next poses to correct: not the velocity between two
+  // poses 1/20 s apart, which carries their errors divided by that interval (1 cm each: 0.3 m/s),
+  // nor an unknown one, at which a drone is bridged at rest until a verified pose comes.
   bool restart = false;
   if (out.visual_rejected && refusalCountsAgainstPrior(out.verify_score, m.refusals.taken_scores, Impl::kTakenScores,
                                                        m.options.restart_min_score, m.options.verification.min_score)) {
@@ -1433,7 +1435,14 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     m.refused_stretch = {};
   }
   if (restart || refused_too_long) {
-    m.restartPrior(track.T_world_camera, std::nullopt, t_ns);
+    // The prior keeps its velocity, loosened (restart_sigma_velocity_m_s).
+    std::optional<Eigen::Vector3d> v_world;
+    if (m.options.restart_sigma_velocity_m_s > 0 && prediction && prediction->inertial &&
+        !prediction->velocity_unobserved && prediction->v_world_body) {
+      v_world = prediction->v_world_body;
+    }
+    m.restartPrior(track.T_world_camera, v_world, t_ns,
+                   std::max(m.options.restart_sigma_velocity_m_s, v_world ? prediction->sigma_velocity_m_s : 0.0));
     m.refusals.count = 0;
     m.refused_stretch = {};
     if (restart) {

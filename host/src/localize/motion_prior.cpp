@@ -101,7 +101,7 @@ bool ConstantVelocityPrior::carryOn(int64_t t_ns, const std::optional<MotionPred
 }
 
 void ConstantVelocityPrior::reset(const std::optional<Pose>& T_world_camera,
-                                  const std::optional<Eigen::Vector3d>& v_world_camera) {
+                                  const std::optional<Eigen::Vector3d>& v_world_camera, double /*sigma_velocity_m_s*/) {
   prev_pose_.reset();
   last_pose_.reset();
   last_imu_t_ns_.reset();
@@ -164,7 +164,7 @@ std::optional<BridgedPose> InertialPrior::bridge(int64_t t_ns, const std::option
 }
 
 void InertialPrior::reset(const std::optional<Pose>& T_world_camera,
-                          const std::optional<Eigen::Vector3d>& v_world_camera) {
+                          const std::optional<Eigen::Vector3d>& v_world_camera, double /*sigma_velocity_m_s*/) {
   predictor_.reset();  // timestamps may start over
   motion_.reset(T_world_camera, v_world_camera);
 }
@@ -207,6 +207,8 @@ std::optional<MotionPrediction> EkfPrior::filterAt(int64_t t_ns) const {
   // Largest position sigma (the translation block is in the camera frame: its trace bounds it).
   out.sigma_m = std::sqrt(std::max(0.0, p->covariance_camera.topLeftCorner<3, 3>().trace()));
   out.velocity_unobserved = velocity_unobserved_;
+  out.v_world_body = p->v_world_body;
+  out.sigma_velocity_m_s = std::sqrt(std::max(0.0, p->state.P.block<3, 3>(3, 3).diagonal().maxCoeff()));
   return out;
 }
 
@@ -247,10 +249,12 @@ void EkfPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Mat
   if (!aiding_.enabled || !has_imu_) return;
   last_update_t_ns_ = t_ns;
   if (!ekf_.initialized()) {
-    // The first trusted pose starts the filter: with the caller's velocity (tight), else an
-    // unknown one (initial_sigma_velocity_m_s) that the next poses pin down.
+    // The first trusted pose starts the filter: with the caller's velocity (tight unless the
+    // caller gave its sigma), else an unknown one (initial_sigma_velocity_m_s) that the next
+    // poses pin down.
     const EkfOptions& o = ekf_.options();
-    double sigma_v = start_velocity_ ? 0.1 : o.initial_sigma_velocity_m_s;
+    double sigma_v = start_velocity_ ? (start_sigma_velocity_m_s_ > 0 ? start_sigma_velocity_m_s_ : 0.1)
+                                     : o.initial_sigma_velocity_m_s;
     if (!start_velocity_ && scene_depth_m_ > 0 && aiding_.unknown_velocity_depths_per_s > 0) {
       sigma_v = std::max(0.5, aiding_.unknown_velocity_depths_per_s * scene_depth_m_);
     }
@@ -292,7 +296,8 @@ void EkfPrior::setSceneDepth(double depth_m) {
   if (std::isfinite(depth_m) && depth_m > 0 && scene_depth_m_ <= 0) scene_depth_m_ = depth_m;
 }
 
-void EkfPrior::reset(const std::optional<Pose>& T_world_camera, const std::optional<Eigen::Vector3d>& v_world_camera) {
+void EkfPrior::reset(const std::optional<Pose>& T_world_camera, const std::optional<Eigen::Vector3d>& v_world_camera,
+                     double sigma_velocity_m_s) {
   scene_depth_m_ = 0;
   ekf_.reset();
   has_imu_ = false;
@@ -302,7 +307,11 @@ void EkfPrior::reset(const std::optional<Pose>& T_world_camera, const std::optio
   updated_t_ns_.reset();
   last_innovation_ = std::numeric_limits<double>::quiet_NaN();
   start_velocity_.reset();
-  if (v_world_camera && v_world_camera->allFinite()) start_velocity_ = *v_world_camera;
+  start_sigma_velocity_m_s_ = 0;
+  if (v_world_camera && v_world_camera->allFinite()) {
+    start_velocity_ = *v_world_camera;
+    if (std::isfinite(sigma_velocity_m_s) && sigma_velocity_m_s > 0) start_sigma_velocity_m_s_ = sigma_velocity_m_s;
+  }
 }
 
 std::vector<FilterOutput> EkfPrior::takeOutputs() {
@@ -371,8 +380,10 @@ std::optional<BridgedPose> ViewPrior::bridge(int64_t t_ns, const std::optional<M
   return b;
 }
 
-void ViewPrior::reset(const std::optional<Pose>& T_world_view, const std::optional<Eigen::Vector3d>& v_world) {
-  prior_->reset(T_world_view ? std::optional<Pose>(toCamera(*T_world_view)) : std::nullopt, v_world);
+void ViewPrior::reset(const std::optional<Pose>& T_world_view, const std::optional<Eigen::Vector3d>& v_world,
+                      double sigma_velocity_m_s) {
+  prior_->reset(T_world_view ? std::optional<Pose>(toCamera(*T_world_view)) : std::nullopt, v_world,
+                sigma_velocity_m_s);
 }
 
 std::optional<MotionPrediction> ViewPrior::filtered(int64_t t_ns) const {

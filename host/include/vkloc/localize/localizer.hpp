@@ -226,18 +226,25 @@ struct LocalizerOptions {
   /// apart) that the prior's gate refused although their verification score was at least
   /// restart_min_score, or at least verification.min_score and above the scores of each of the
   /// last five poses the prior took (refusalCountsAgainstPrior), the prior restarts at the last of
-  /// them with an unknown velocity (Localizer result prior_restarted). 0 = never.
+  /// them (Localizer result prior_restarted; its velocity: restart_sigma_velocity_m_s). 0 = never.
   int restart_after_refusals = 2;
   double restart_min_score = 0.5;
   /// Restart of the motion prior whatever the scores: after the prior's gate has refused every
   /// tracked pose for this long (seconds; poses at most motion_search_max_gap_s apart; a pose
   /// refused only because a restarted prior takes verified poses alone does not count), it
-  /// restarts at the last one with an unknown velocity (prior_restarted). A prior that refuses
-  /// alignments frame after frame for that long has drifted (a wrong velocity or tilt taken from
-  /// biased poses, with a covariance too small to admit it) more often than the alignments are
-  /// all wrong, and an inertial stretch goes on drifting until max_inertial_s ends it anyway.
-  /// 0 = never.
+  /// restarts at the last one (prior_restarted). A prior that refuses alignments frame after
+  /// frame for that long has drifted (a wrong velocity or tilt taken from biased poses, with a
+  /// covariance too small to admit it) more often than the alignments are all wrong, and an
+  /// inertial stretch goes on drifting until max_inertial_s ends it anyway. 0 = never.
   double restart_after_refused_s = 0.3;
+  /// 1-sigma (m/s, at least the filter's own) of the velocity a restarted prior keeps: the
+  /// filter's velocity at that frame, when it has an observed one (kEkf), else an unknown
+  /// velocity as at a start. The poses it refused disagree with its position; its velocity,
+  /// integrated from the accelerometer, may be off by what the refusals say but not by the
+  /// camera's speed, which is what a start at rest is off by (a drone restarted so drifts off at
+  /// its speed, and the only poses a restarted prior takes, verified ones, may not come where
+  /// the refusals came from). 0 = an unknown velocity.
+  double restart_sigma_velocity_m_s = 1.0;
   /// With kAuto and an Accelerator: time the CPU and device live stages + alignment on the
   /// first frame and keep the faster one (instead of deciding by the device type alone).
   bool calibrate_backend = false;

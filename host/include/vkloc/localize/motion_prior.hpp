@@ -89,6 +89,10 @@ struct MotionPrediction {
   /// Constant-velocity model (not inertial): a single pose since the reset and no velocity given,
   /// so the prediction holds that pose whatever the camera does.
   bool velocity_unobserved = false;
+  /// kEkf: the filter's velocity of the body, world frame, m/s (the camera's up to its lever arm
+  /// turning), and its largest 1-sigma over the world axes; nullopt for the other priors.
+  std::optional<Eigen::Vector3d> v_world_body;
+  double sigma_velocity_m_s = 0;
 };
 
 /// The filter's state at one IMU reading (kEkf), for output at the IMU rate.
@@ -129,9 +133,11 @@ class MotionPrior {
   /// Forgets the motion (and IMU readings: timestamps may start over) and restarts from
   /// T_world_camera, or from nothing when it is nullopt or invalid, moving at v_world_camera
   /// (the camera's velocity in the world frame, m/s) when it is given and finite, else at an
-  /// unknown velocity.
+  /// unknown velocity. `sigma_velocity_m_s` > 0 is the given velocity's 1-sigma (m/s; 0: known
+  /// well, 0.1 m/s); priors without a velocity covariance ignore it.
   virtual void reset(const std::optional<Pose>& T_world_camera,
-                     const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt) = 0;
+                     const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt,
+                     double sigma_velocity_m_s = 0) = 0;
   /// The last trusted (or bridged, or reset) camera pose.
   virtual std::optional<Pose> lastPose() const = 0;
   /// The prior's estimate of the camera at t_ns when it fuses the visual poses with other
@@ -168,8 +174,8 @@ class ViewPrior final : public MotionPrior {
   void addVisualPose(int64_t t_ns, const Pose& T_world_view, const Matrix6d& covariance) override;
   std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
                                     const Pose& guess) override;
-  void reset(const std::optional<Pose>& T_world_view,
-             const std::optional<Eigen::Vector3d>& v_world = std::nullopt) override;
+  void reset(const std::optional<Pose>& T_world_view, const std::optional<Eigen::Vector3d>& v_world = std::nullopt,
+             double sigma_velocity_m_s = 0) override;
   std::optional<Pose> lastPose() const override;
   std::optional<MotionPrediction> filtered(int64_t t_ns) const override;
   double lastInnovation() const override { return prior_->lastInnovation(); }
@@ -203,7 +209,8 @@ class ConstantVelocityPrior final : public MotionPrior {
   std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
                                     const Pose& guess) override;
   void reset(const std::optional<Pose>& T_world_camera,
-             const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt) override;
+             const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt,
+             double sigma_velocity_m_s = 0) override;
   std::optional<Pose> lastPose() const override { return last_pose_; }
 
   /// Moves the motion on by one pose at t_ns (the last one becomes the one before).
@@ -239,7 +246,8 @@ class InertialPrior final : public MotionPrior {
   std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
                                     const Pose& guess) override;
   void reset(const std::optional<Pose>& T_world_camera,
-             const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt) override;
+             const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt,
+             double sigma_velocity_m_s = 0) override;
   std::optional<Pose> lastPose() const override { return motion_.lastPose(); }
 
  private:
@@ -276,7 +284,8 @@ class EkfPrior final : public MotionPrior {
   std::optional<BridgedPose> bridge(int64_t t_ns, const std::optional<MotionPrediction>& prediction,
                                     const Pose& guess) override;
   void reset(const std::optional<Pose>& T_world_camera,
-             const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt) override;
+             const std::optional<Eigen::Vector3d>& v_world_camera = std::nullopt,
+             double sigma_velocity_m_s = 0) override;
   std::optional<Pose> lastPose() const override { return motion_.lastPose(); }
   /// The filter's state at t_ns after the update with the pose taken at t_ns (its posterior:
   /// the visual pose weighed against the IMU propagation by their covariances).
@@ -298,6 +307,7 @@ class EkfPrior final : public MotionPrior {
   ConstantVelocityPrior motion_;
   ErrorStateEkf ekf_;
   std::optional<Eigen::Vector3d> start_velocity_;
+  double start_sigma_velocity_m_s_ = 0;  ///< Of start_velocity_ (0: 0.1 m/s).
   double scene_depth_m_ = 0;
   bool has_imu_ = false;  ///< The filter took a reading since reset (without, the constant-velocity prior runs).
   bool velocity_unobserved_ = false;  ///< Started at an unknown velocity, no update since.
