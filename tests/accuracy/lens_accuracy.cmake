@@ -7,6 +7,12 @@
 #                 through the fixed central crop of the same size: EIS loses no frame, no more
 #                 frames than the crop are bridged by the IMU alone, and its median error is at
 #                 most 0.5 % of the scene depth (RELATIVE: and at most 10 % above the crop's).
+#   fisheye_city_edge   the same drone and lens, seed 4, 300 frames: from frame ~104 the drone
+#                 flies along the city's edge and the view's upper half is plain ground; the filter
+#                 refuses the poses there and restarts (LocalizerOptions::restart_after_refused_s).
+#                 Both views lose no frame and keep the median error within 0.5 % of the scene
+#                 depth (a restart at rest, before the restart kept the filter's velocity, left
+#                 the stabilised view 44 frames lost and the crop 45 m off over 183 frames).
 #   radtan_mild, radtan_euroc   the room (easy, 300 frames) and the same images through a
 #                 radial-tangential lens (vkloc distort; mild: k1 -0.1 k2 0.01; euroc: EuRoC's
 #                 k1 -0.28 k2 0.074), tracked through the undistorted view: no frame lost and
@@ -56,6 +62,20 @@ if(CASE STREQUAL "fisheye_eis")
     check(eis "${eis_translation_median_m} <= 1.1 * ${crop_translation_median_m}"
           "median ${eis_translation_median_m} m > 1.1 x the crop's ${crop_translation_median_m} m")
   endif()
+elseif(CASE STREQUAL "fisheye_city_edge")
+  set(seq ${WORK}/city_hard_agile_fisheye_seed4)
+  if(NOT EXISTS ${seq}/images.txt)
+    run("simulate" ${VKLOC} simulate city hard --lens fisheye --trajectory drone_agile --frames 300 --seed 4
+        --out ${seq})
+  endif()
+  set(view --view-size 480x360 --view-hfov 90 --view-pitch 45)
+  track_case(eis ${seq} --view stabilised ${view})
+  track_case(crop ${seq} --view undistorted ${view})
+  foreach(label eis crop)
+    check(${label} "${${label}_lost} == 0" "lost ${${label}_lost} frames")
+    check(${label} "${${label}_translation_median_m} <= 0.005 * ${${label}_scene_depth_median_m}"
+          "median ${${label}_translation_median_m} m > 0.5 % of the depth")
+  endforeach()
 elseif(CASE MATCHES "^radtan_(mild|euroc)$")
   set(k_mild "-0.1,0.01,1e-4,-1e-4,0")
   set(k_euroc "-0.28,0.074,2e-4,1.8e-5,0")
