@@ -318,6 +318,45 @@ TEST(EkfPrior, PredictionsCarryTheVelocityAndAResetTakesItsSigma) {
   EXPECT_FALSE(q->v_world_body.has_value());
 }
 
+// Past max_inertial_s without a pose the prediction goes back to the motion model, whose attitude
+// is the last pose's; the filter's attitude goes on with the gyro (what a stabilised view turns
+// with), and through a ViewPrior it is the view's.
+TEST(EkfPrior, TheAttitudeGoesOnPastTheInertialStretch) {
+  const Flight f = flight();
+  const InertialAiding aiding = flightAiding();
+  const int64_t t0 = f.trajectory.startNs();
+  ViewPrior view(std::make_unique<EkfPrior>(ekfAtStart(aiding, f.trajectory.evaluate(t0))));
+  EXPECT_FALSE(view.attitude(t0).has_value());  // before the filter starts
+  size_t next = 0;
+  const Matrix6d visual = Matrix6d::Identity() * 1e-6;
+  for (int i = 0; i < 3; ++i) {
+    const int64_t t = t0 + i * kFrameNs;
+    feedImu(view, f.imu, next, t);
+    view.addVisualPose(t, f.trajectory.evaluate(t).T_world_body, visual);  // the view is the camera
+  }
+  const int64_t t_late = t0 + 2 * kFrameNs + static_cast<int64_t>((aiding.max_inertial_s + 0.5) * 1e9);
+  feedImu(view, f.imu, next, t_late);
+  const auto p = view.cameraPrior().predict(t_late);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_FALSE(p->inertial);
+  const Eigen::Matrix3d R_truth = f.trajectory.evaluate(t_late).T_world_body.linear();
+  EXPECT_GT(rotationAngleDeg(p->T_world_camera.linear().transpose() * R_truth), 1.0);  // the stale one
+  const std::optional<Eigen::Matrix3d> R = view.cameraPrior().attitude(t_late);
+  ASSERT_TRUE(R.has_value());
+  EXPECT_LT(rotationAngleDeg(R->transpose() * R_truth), 0.1);
+  // Through a view turned by T_camera_view: R_world_camera R_camera_view.
+  Pose T_camera_view = Pose::Identity();
+  T_camera_view.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  view.setView(T_camera_view);
+  const std::optional<Eigen::Matrix3d> R_view = view.attitude(t_late);
+  ASSERT_TRUE(R_view.has_value());
+  EXPECT_LT(rotationAngleDeg(R_view->transpose() * (*R * T_camera_view.linear())), 1e-9);
+
+  ConstantVelocityPrior plain;
+  plain.reset(poseAt(0, 0));
+  EXPECT_FALSE(plain.attitude(0).has_value());
+}
+
 // Frames delivered late (the IMU fed 60 ms past each frame): the prediction, the gate and the
 // update are at the frame's time, so the truth passes and the filter ends where it would have
 // with the frames on time; a pose 1 m off is still refused.

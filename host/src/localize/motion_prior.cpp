@@ -212,6 +212,13 @@ std::optional<MotionPrediction> EkfPrior::filterAt(int64_t t_ns) const {
   return out;
 }
 
+std::optional<Eigen::Matrix3d> EkfPrior::attitude(int64_t t_ns) const {
+  if (!ekf_.initialized()) return std::nullopt;
+  std::optional<MotionPrediction> p = filterAt(t_ns);
+  if (!p) return std::nullopt;
+  return p->T_world_camera.linear();
+}
+
 std::optional<MotionPrediction> EkfPrior::predict(int64_t t_ns) const {
   if (aiding_.enabled && ekf_.initialized() &&
       static_cast<double>(t_ns - last_update_t_ns_) * 1e-9 <= aiding_.max_inertial_s) {
@@ -390,6 +397,12 @@ std::optional<MotionPrediction> ViewPrior::filtered(int64_t t_ns) const {
   std::optional<MotionPrediction> p = prior_->filtered(t_ns);
   if (p) p = toView(*p);
   return p;
+}
+
+std::optional<Eigen::Matrix3d> ViewPrior::attitude(int64_t t_ns) const {
+  std::optional<Eigen::Matrix3d> R = prior_->attitude(t_ns);
+  if (R) R = *R * T_camera_view_.linear();
+  return R;
 }
 
 std::optional<Pose> ViewPrior::lastPose() const {

@@ -150,6 +150,11 @@ class MotionPrior {
   virtual double lastInnovation() const { return std::numeric_limits<double>::quiet_NaN(); }
   /// The filter states since the last call, oldest first (IMU rate; empty for priors without one).
   virtual std::vector<FilterOutput> takeOutputs() { return {}; }
+  /// R_world_camera at t_ns from the IMU while a filter runs, however long since its last visual
+  /// pose (predict() has then fallen back to the motion model): the gyro carries the attitude on
+  /// when nothing carries the position, and a stabilised view needs no more. nullopt for priors
+  /// without a filter, and before the filter starts.
+  virtual std::optional<Eigen::Matrix3d> attitude(int64_t /*t_ns*/) const { return std::nullopt; }
   /// The median depth of the scene in view (metres; the first keyframe's), which scales what an
   /// unknown start velocity may be. Priors without a velocity prior ignore it.
   virtual void setSceneDepth(double /*depth_m*/) {}
@@ -180,6 +185,7 @@ class ViewPrior final : public MotionPrior {
   std::optional<MotionPrediction> filtered(int64_t t_ns) const override;
   double lastInnovation() const override { return prior_->lastInnovation(); }
   std::vector<FilterOutput> takeOutputs() override { return prior_->takeOutputs(); }
+  std::optional<Eigen::Matrix3d> attitude(int64_t t_ns) const override;
   void setSceneDepth(double depth_m) override { prior_->setSceneDepth(depth_m); }
 
   /// Pose and covariance (right perturbation) of the camera from the view's, and back.
@@ -292,6 +298,7 @@ class EkfPrior final : public MotionPrior {
   std::optional<MotionPrediction> filtered(int64_t t_ns) const override;
   double lastInnovation() const override { return last_innovation_; }
   std::vector<FilterOutput> takeOutputs() override;
+  std::optional<Eigen::Matrix3d> attitude(int64_t t_ns) const override;
   /// An unknown start velocity gets 1-sigma unknown_velocity_depths_per_s x depth (m/s) instead
   /// of the fixed EkfOptions::initial_sigma_velocity_m_s, when the depth is known before the
   /// filter starts: cameras move at most a few scene depths per second (a drone 25 m/s over a
