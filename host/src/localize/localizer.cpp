@@ -1190,21 +1190,18 @@ Result<LocalizationResult> Localizer::localize(int64_t t_ns, const ImageU8& imag
   if (T_world_camera_guess && !isValidPose(*T_world_camera_guess)) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: the pose guess is not a finite rigid transform");
   }
-  // The view of this frame (eq. 8): stabilised at the camera's attitude as the guess, the prior's
-  // IMU prediction, the filter's attitude (a prediction gone back to the motion model after
-  // max_inertial_s without a pose: the gyro still carries the attitude) or the last pose has it
-  // (only the view's choice depends on it: the extrinsic used below is the exact one of the
-  // image made).
+  // The view of this frame (eq. 8): stabilised at the camera's attitude as the guess, the
+  // filter's attitude (also past max_inertial_s without a pose, when its prediction has gone back
+  // to the motion model: the gyro still carries the attitude), the prior's prediction or the last
+  // pose has it (only the view's choice depends on it: the extrinsic used below is the exact one
+  // of the image made).
   Pose T_camera_view = Pose::Identity();
   if (m.front->options().kind == ViewKind::kStabilised) {
-    std::optional<Eigen::Matrix3d> R_world_camera;
-    if (T_world_camera_guess) R_world_camera = T_world_camera_guess->linear();
+    const MotionPrior& prior = m.view_prior->cameraPrior();
+    std::optional<Eigen::Matrix3d> R_world_camera =
+        T_world_camera_guess ? std::optional<Eigen::Matrix3d>(T_world_camera_guess->linear()) : prior.attitude(t_ns);
     if (!R_world_camera) {
-      const MotionPrior& prior = m.view_prior->cameraPrior();
-      const std::optional<MotionPrediction> p = prior.predict(t_ns);
-      if (p && p->inertial) R_world_camera = p->T_world_camera.linear();
-      if (!R_world_camera) R_world_camera = prior.attitude(t_ns);
-      if (!R_world_camera && p) R_world_camera = p->T_world_camera.linear();
+      if (std::optional<MotionPrediction> p = prior.predict(t_ns)) R_world_camera = p->T_world_camera.linear();
     }
     if (!R_world_camera && m.last_camera_pose) R_world_camera = m.last_camera_pose->linear();
     if (R_world_camera) T_camera_view.linear() = m.front->viewRotation(*R_world_camera);

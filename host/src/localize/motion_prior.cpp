@@ -214,8 +214,8 @@ std::optional<MotionPrediction> EkfPrior::filterAt(int64_t t_ns) const {
 
 std::optional<Eigen::Matrix3d> EkfPrior::attitude(int64_t t_ns) const {
   if (!ekf_.initialized()) return std::nullopt;
-  std::optional<MotionPrediction> p = filterAt(t_ns);
-  if (!p) return std::nullopt;
+  Result<EkfPrediction> p = ekf_.predict(t_ns);
+  if (!p.ok()) return std::nullopt;
   return p->T_world_camera.linear();
 }
 
@@ -260,8 +260,7 @@ void EkfPrior::addVisualPose(int64_t t_ns, const Pose& T_world_camera, const Mat
     // caller gave its sigma), else an unknown one (initial_sigma_velocity_m_s) that the next
     // poses pin down.
     const EkfOptions& o = ekf_.options();
-    double sigma_v = start_velocity_ ? (start_sigma_velocity_m_s_ > 0 ? start_sigma_velocity_m_s_ : 0.1)
-                                     : o.initial_sigma_velocity_m_s;
+    double sigma_v = start_velocity_ ? start_sigma_velocity_m_s_ : o.initial_sigma_velocity_m_s;
     if (!start_velocity_ && scene_depth_m_ > 0 && aiding_.unknown_velocity_depths_per_s > 0) {
       sigma_v = std::max(0.5, aiding_.unknown_velocity_depths_per_s * scene_depth_m_);
     }
@@ -314,11 +313,8 @@ void EkfPrior::reset(const std::optional<Pose>& T_world_camera, const std::optio
   updated_t_ns_.reset();
   last_innovation_ = std::numeric_limits<double>::quiet_NaN();
   start_velocity_.reset();
-  start_sigma_velocity_m_s_ = 0;
-  if (v_world_camera && v_world_camera->allFinite()) {
-    start_velocity_ = *v_world_camera;
-    if (std::isfinite(sigma_velocity_m_s) && sigma_velocity_m_s > 0) start_sigma_velocity_m_s_ = sigma_velocity_m_s;
-  }
+  start_sigma_velocity_m_s_ = std::isfinite(sigma_velocity_m_s) && sigma_velocity_m_s > 0 ? sigma_velocity_m_s : 0.1;
+  if (v_world_camera && v_world_camera->allFinite()) start_velocity_ = *v_world_camera;
 }
 
 std::vector<FilterOutput> EkfPrior::takeOutputs() {

@@ -314,7 +314,7 @@ class EkfPrior final : public MotionPrior {
   ConstantVelocityPrior motion_;
   ErrorStateEkf ekf_;
   std::optional<Eigen::Vector3d> start_velocity_;
-  double start_sigma_velocity_m_s_ = 0;  ///< Of start_velocity_ (0: 0.1 m/s).
+  double start_sigma_velocity_m_s_ = 0.1;  ///< 1-sigma of start_velocity_, m/s.
   double scene_depth_m_ = 0;
   bool has_imu_ = false;  ///< The filter took a reading since reset (without, the constant-velocity prior runs).
   bool velocity_unobserved_ = false;  ///< Started at an unknown velocity, no update since.
