@@ -172,6 +172,11 @@ void LocalizerArgs::add(CLI::App& app) {
                  "alignment's own)")
       ->check(CLI::IsMember({"filter", "visual"}))
       ->capture_default_str();
+  app.add_option("--rotation-prior", rotation_prior,
+                 "Attitude prior of the alignment: filter (the EKF's predicted attitude, where it predicts from the "
+                 "IMU) | off")
+      ->check(CLI::IsMember({"filter", "off"}))
+      ->capture_default_str();
   app.add_option("--backend", backend, "Live edges + alignment: auto | vulkan | cpu")
       ->check(CLI::IsMember({"auto", "vulkan", "cpu"}))
       ->capture_default_str();
@@ -192,6 +197,7 @@ void LocalizerArgs::apply(LocalizerOptions& options) const {
   options.max_search_level = max_search_level;
   options.inertial.ekf.measurement_covariance_scale = visual_covariance_scale;
   options.report_filtered_pose = frame_pose == "filter";
+  options.rotation_prior_from_filter = rotation_prior == "filter";
 }
 
 std::vector<std::string> LocalizerArgs::arguments() const {
@@ -208,7 +214,9 @@ std::vector<std::string> LocalizerArgs::arguments() const {
           "--visual-covariance-scale",
           fmt::format("{:g}", visual_covariance_scale),
           "--frame-pose",
-          frame_pose};
+          frame_pose,
+          "--rotation-prior",
+          rotation_prior};
 }
 
 void DeviceArgs::add(CLI::App& app) {

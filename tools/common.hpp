@@ -92,7 +92,8 @@ struct LocalizerArgs {
   std::string filter = "ekf";  ///< Inertial fusion: ekf | window.
   int max_search_level = LocalizerOptions{}.max_search_level;
   double visual_covariance_scale = InertialAiding{}.ekf.measurement_covariance_scale;
-  std::string frame_pose = "filter";  ///< Tracked frames' pose: filter (the EKF's posterior) | visual.
+  std::string frame_pose = "filter";      ///< Tracked frames' pose: filter (the EKF's posterior) | visual.
+  std::string rotation_prior = "filter";  ///< Attitude prior of the alignment: filter | off.
   void add(CLI::App& app);
   /// Sets the options' backend, policy and keyframe threading; throws Failure on a bad value.
   void apply(LocalizerOptions& options) const;

@@ -241,6 +241,9 @@ struct Localizer::Impl {
     s.push_back(score);
   }
   int search_level = 0;  ///< This frame's alignment starts at least this deep (searchLevel).
+  /// This frame's attitude prior for align() (rotation_prior_from_filter); nullopt outside the
+  /// tracking of a frame the filter predicted.
+  std::optional<RotationPrior> rotation_prior;
 
   // Relocalization and global initialization (RelocalizationOptions).
   std::shared_ptr<const KeyframeDatabase> database;
@@ -348,6 +351,12 @@ struct Localizer::Impl {
     return probe;
   }
 
+  /// The pose the filter takes from an alignment: the edges' own (without the rotation prior,
+  /// which came from the filter).
+  static const Pose& filterPose(const TrackResult& r) {
+    return r.T_world_camera_edges ? *r.T_world_camera_edges : r.T_world_camera;
+  }
+
   /// Inliers on the finest level of a result (0 unless tracked).
   static double finestInliers(const TrackResult& r) {
     return r.state == TrackingState::kTracking ? r.quality.inlier_ratio * r.quality.points_in_image : 0.0;
@@ -373,6 +382,7 @@ struct Localizer::Impl {
       slow = slowPoints(reference, start, *last_pose, options.max_point_motion_px);
     }
     EdgeTrackerOptions tracker = options.tracker;
+    tracker.rotation_prior = rotation_prior;
     if (search_level > 0) {
       tracker.coarsest_level = std::max(tracker.coarsest_level, search_level);
       if (tracker.far_first_coarsest_level >= 0) {
@@ -387,7 +397,9 @@ struct Localizer::Impl {
       // level barely tells a translation across the view from a rotation, and the finer levels
       // do not pull back a start that slid along that valley: the alignment from the usual
       // levels is a second hypothesis, and the one with more inliers on the finest level wins.
-      Result<TrackResult> usual = backend.align(points, start, options.tracker);
+      EdgeTrackerOptions usual_tracker = options.tracker;
+      usual_tracker.rotation_prior = rotation_prior;
+      Result<TrackResult> usual = backend.align(points, start, usual_tracker);
       if (!usual.ok()) return usual.error();
       if (finestInliers(*usual) > finestInliers(*r)) r = std::move(usual);
     }
@@ -816,7 +828,7 @@ struct Localizer::Impl {
                         LocalizationResult& out) {
     const Keyframe& keyframe = *keyframes->current();
     const bool agrees = prediction && prediction->inertial &&
-                        motion->consistent(*prediction, track.T_world_camera, track.covariance, keyframe.scene_depth_m);
+                        motion->consistent(*prediction, filterPose(track), track.covariance, keyframe.scene_depth_m);
     if (!agrees) {
       // The velocity from the previous frame when that one was relocalized too (a search that
       // goes on frame after frame), else unknown (a pose tracked before a jump is no reference).
@@ -829,7 +841,7 @@ struct Localizer::Impl {
       restartPrior(track.T_world_camera, v_world, t_ns);
     }
     motion->setSceneDepth(keyframe.scene_depth_m);
-    motion->addVisualPose(t_ns, track.T_world_camera, track.covariance);
+    motion->addVisualPose(t_ns, filterPose(track), track.covariance);
     keyframes->frameTracked(track.quality);
     tracked_since_reset = true;
     refusals = {};
@@ -1327,6 +1339,23 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
       m.searchLevel(T_world_camera_guess ? std::nullopt : prediction, m.keyframes->current()->scene_depth_m);
   out.search_level = m.search_level;
   m.live_levels = 0;
+  // The filter's attitude as a prior of this frame's alignments (cleared on every way out).
+  struct ClearOnExit {
+    std::optional<RotationPrior>& prior;
+    ~ClearOnExit() { prior.reset(); }
+  } clear_rotation_prior{m.rotation_prior};
+  m.rotation_prior.reset();
+  if (m.options.rotation_prior_from_filter && !T_world_camera_guess && prediction && prediction->inertial) {
+    const Eigen::Matrix3d covariance = prediction->covariance.bottomRightCorner<3, 3>();
+    // A floor of (1e-5 rad)^2 keeps the information finite where the filter reports none smaller.
+    RotationPrior prior;
+    prior.R_world_camera = prediction->T_world_camera.linear();
+    prior.covariance = 0.5 * (covariance + covariance.transpose()) + 1e-10 * Eigen::Matrix3d::Identity();
+    if (prior.covariance.allFinite() && covariance.trace() > 0 &&
+        Eigen::LLT<Eigen::Matrix3d>(prior.covariance).info() == Eigen::Success) {
+      m.rotation_prior = prior;
+    }
+  }
   auto alignFrom = [&](const Pose& start) { return m.align(*m.active, gray, start, out, m.live_levels); };
   Result<TrackResult> aligned = alignFrom(guess);
   if (!aligned.ok()) return aligned.error();
@@ -1352,9 +1381,9 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
                m.options.motion_search_confident_score;
   };
   auto refused = [&](const TrackResult& r) {
-    return r.state == TrackingState::kTracking &&
-           (!m.motion->consistent(*prediction, r.T_world_camera, r.covariance, m.keyframes->current()->scene_depth_m) ||
-            unconfirmed(r));
+    return r.state == TrackingState::kTracking && (!m.motion->consistent(*prediction, Impl::filterPose(r), r.covariance,
+                                                                         m.keyframes->current()->scene_depth_m) ||
+                                                   unconfirmed(r));
   };
   // The grid first: a settled prior has none, and its frames are not tested against the gate twice.
   const std::optional<Impl::SearchGrid> grid =
@@ -1374,6 +1403,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     if (!refined.ok()) return refined.error();
     track = std::move(refined).value();
   }
+  m.rotation_prior.reset();
   m.last_t_ns = t_ns;
   const Keyframe& keyframe = *m.keyframes->current();
   out.quality = track.quality;
@@ -1398,7 +1428,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     out.inertial_sigma_m = prediction->sigma_m;
     if (track.state == TrackingState::kTracking) {
       out.visual_rejected =
-          !m.motion->consistent(*prediction, track.T_world_camera, track.covariance, keyframe.scene_depth_m);
+          !m.motion->consistent(*prediction, Impl::filterPose(track), track.covariance, keyframe.scene_depth_m);
       out.innovation = m.motion->lastInnovation();
     }
   }
@@ -1464,7 +1494,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   if (track.state == TrackingState::kTracking && !out.visual_rejected) {
     if (!out.prior_restarted && prediction && prediction->inertial) m.refusals.restarted = false;
     m.motion->setSceneDepth(keyframe.scene_depth_m);
-    m.motion->addVisualPose(t_ns, track.T_world_camera, track.covariance);
+    m.motion->addVisualPose(t_ns, Impl::filterPose(track), track.covariance);
     if (m.options.report_filtered_pose) {
       if (std::optional<MotionPrediction> posterior = m.motion->filtered(t_ns)) {
         out.T_world_camera_visual = out.T_world_camera;

@@ -301,6 +301,20 @@ Status validateEdgeTrackerOptions(const EdgeTrackerOptions& o) {
   if (!(o.max_translation_m > 0)) {
     return makeError(ErrorCode::kInvalidArgument, "edge tracker: max_translation_m must be > 0");
   }
+  if (o.rotation_prior) {
+    Pose R = Pose::Identity();
+    R.linear() = o.rotation_prior->R_world_camera;
+    if (!isValidPose(R)) {
+      return makeError(ErrorCode::kInvalidArgument, "edge tracker: rotation_prior's R_world_camera is not a rotation");
+    }
+    const Eigen::Matrix3d& C = o.rotation_prior->covariance;
+    const bool finite = C.allFinite();
+    if (!finite || (C - C.transpose()).cwiseAbs().maxCoeff() > 1e-9 * C.cwiseAbs().maxCoeff() ||
+        Eigen::LLT<Eigen::Matrix3d>(C).info() != Eigen::Success) {
+      return makeError(ErrorCode::kInvalidArgument,
+                       "edge tracker: rotation_prior's covariance must be finite, symmetric and positive definite");
+    }
+  }
   return Status::success();
 }
 
@@ -440,6 +454,28 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
 
   const Pose T_camera_ref_guess = orthonormalized(T_world_camera_guess.inverse() * reference.T_world_ref);
   Pose T = T_camera_ref_guess;
+  // The rotation prior on T_camera_ref: R_camera_ref = expSO3(r) R_camera_ref_prior, r ~ N(0,
+  // covariance) (a camera-frame phi of the prior is -r, with the same covariance), and
+  // r(delta) = logSO3(expSO3(delta_phi) R_camera_ref) ~= r + Jl^-1(r) delta_phi for the tracker's
+  // left increment. The data's normal equations are sigma^2 times their information (H = sum w
+  // J J^T, eq. 14), so the prior enters as sigma^2 J^T Sigma^-1 J and sigma^2 J^T Sigma^-1 r, and
+  // its negative log-likelihood in robustCost's units (2 / (nu + 1) of the data's) as
+  // r^T Sigma^-1 r / (nu + 1).
+  Eigen::Matrix3d R_camera_ref_prior = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d prior_information = Eigen::Matrix3d::Zero();
+  if (options.rotation_prior) {
+    R_camera_ref_prior = options.rotation_prior->R_world_camera.transpose() * reference.T_world_ref.linear();
+    prior_information = options.rotation_prior->covariance.ldlt().solve(Eigen::Matrix3d::Identity());
+    prior_information = 0.5 * (prior_information + prior_information.transpose());
+  }
+  auto priorResidual = [&](const Pose& T_cr) -> Eigen::Vector3d {
+    return logSO3(T_cr.linear() * R_camera_ref_prior.transpose());
+  };
+  auto priorCost = [&](const Pose& T_cr) {
+    if (!options.rotation_prior) return 0.0;
+    const Eigen::Vector3d r = priorResidual(T_cr);
+    return r.dot(prior_information * r) / (options.nu + 1.0);
+  };
   int iterations = 0;
   const std::vector<EdgePoint>* uploaded = nullptr;
   auto usePoints = [&](const std::vector<EdgePoint>& points) -> Status {
@@ -480,6 +516,13 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
           Matrix6d H;
           Vector6d g;
           unpackEdgeNormalEquations(eq, H, g);
+          if (options.rotation_prior) {
+            const Eigen::Vector3d r = priorResidual(T);
+            const Eigen::Matrix3d J = leftJacobianInverseSO3(r);
+            const double sigma2 = at_T.sigma_px * at_T.sigma_px;
+            H.bottomRightCorner<3, 3>() += sigma2 * J.transpose() * prior_information * J;
+            g.tail<3>() += sigma2 * J.transpose() * prior_information * r;
+          }
           // Solve (H + lambda diag(H)) delta = -g (eq. 14); damping only after a failed solve or a
           // rejected step.
           Vector6d delta = Vector6d::Zero();
@@ -515,9 +558,11 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
             in_image_both += in_image_at_T[i] & in_image_at_step[i];
           }
           const double cost_old =
-              robustCost(at_T.residuals, in_image_at_T, in_image_at_step, at_T.sigma_px, options.nu, trunc);
+              robustCost(at_T.residuals, in_image_at_T, in_image_at_step, at_T.sigma_px, options.nu, trunc) +
+              priorCost(T);
           const double cost_new =
-              robustCost(evaluated->residuals, in_image_at_T, in_image_at_step, at_T.sigma_px, options.nu, trunc);
+              robustCost(evaluated->residuals, in_image_at_T, in_image_at_step, at_T.sigma_px, options.nu, trunc) +
+              priorCost(T_new);
           if (2 * in_image_both >= in_image && cost_new <= cost_old) {
             T = T_new;
             at_T = std::move(evaluated).value();
@@ -652,6 +697,18 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
   if (eq[kEdgeNormalCountIndex] >= 6 && ldlt.info() == Eigen::Success && ldlt.isPositive()) {
     result.covariance = q.scale_px * q.scale_px * ldlt.solve(Matrix6d::Identity());
     covariance_ok = result.covariance.allFinite();
+  }
+  if (covariance_ok && options.rotation_prior) {
+    // The edges' pose to first order: with information A (the edges', sigma^-2 H) and B (the
+    // prior's) the MAP pose x solves (A + B) x = A x_edges + B x_prior, so x_edges = x + A^-1 B
+    // (x - x_prior); about T, x - x_prior is Jl^-1(r)^-1 r on the rotation, and B (x - x_prior)
+    // = [0; J^T Sigma^-1 r].
+    const Eigen::Vector3d r = priorResidual(T);
+    const Eigen::Matrix3d J = leftJacobianInverseSO3(r);
+    Vector6d b = Vector6d::Zero();
+    b.tail<3>() = J.transpose() * prior_information * r;
+    const Pose T_camera_ref_edges = orthonormalized(applyLeftIncrement(T, result.covariance * b));
+    result.T_world_camera_edges = orthonormalized(reference.T_world_ref * T_camera_ref_edges.inverse());
   }
   const double correction = (T_camera_ref_guess.inverse() * T).translation().norm();
   const bool ok = covariance_ok && isValidPose(result.T_world_camera) && q.points_in_image >= options.min_points &&

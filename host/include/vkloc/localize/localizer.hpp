@@ -245,6 +245,13 @@ struct LocalizerOptions {
   /// its speed, and the only poses a restarted prior takes, verified ones, may not come where
   /// the refusals came from). 0 = an unknown velocity.
   double restart_sigma_velocity_m_s = 1.0;
+  /// Align each frame the filter predicts from the IMU with the filter's attitude as a prior
+  /// (EdgeTrackerOptions::rotation_prior: the prediction's attitude and its rotation covariance,
+  /// kEkf only); the filter then takes the edges' own pose (TrackResult::T_world_camera_edges),
+  /// so the attitude is not counted twice. The gyro pins the rotation that a narrow view barely
+  /// tells from a translation across it. Not for a caller's guess or a relocalization. The
+  /// tracker options' own rotation_prior is not used (this sets it per frame).
+  bool rotation_prior_from_filter = true;
   /// With kAuto and an Accelerator: time the CPU and device live stages + alignment on the
   /// first frame and keep the faster one (instead of deciding by the device type alone).
   bool calibrate_backend = false;

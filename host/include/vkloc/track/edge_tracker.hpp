@@ -89,6 +89,14 @@ EdgeNormalEquations accumulateEdgeNormalEquations(const std::vector<EdgePoint>& 
 
 /// Options of trackFrame. Why the defaults are what they are (the sequences and frames they were
 /// measured on) is in the README, "Tracker defaults".
+/// A Gaussian prior on the live camera's attitude: R_world_camera_true = R_world_camera *
+/// expSO3(phi), phi ~ N(0, covariance) in the camera frame (rad^2; the rotation block of a
+/// MotionPrediction's covariance).
+struct RotationPrior {
+  Eigen::Matrix3d R_world_camera = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+};
+
 struct EdgeTrackerOptions {
   double nu = 5.0;           ///< Degrees of freedom of the t-distribution weights.
   int scale_iterations = 5;  ///< Fixed-point iterations of the scale per GN iteration.
@@ -127,6 +135,11 @@ struct EdgeTrackerOptions {
   double max_mean_residual_px = 0.8;  ///< Lost above this mean inlier residual, finest level pixels.
   int min_points = 30;                ///< Lost with fewer points projected into the image.
   double max_translation_m = 1e6;     ///< Lost when the correction of the guess exceeds this (m).
+  /// Attitude the camera is known to have from elsewhere (a gyro-propagated filter), added to
+  /// the alignment's cost as a Gaussian on the rotation (a MAP estimate). Edges fix the rotation
+  /// well only where the view is wide: through a narrow view a small rotation and a translation
+  /// across it move the edges alike, and the alignment slides along that valley. nullopt = none.
+  std::optional<RotationPrior> rotation_prior;
 };
 
 /// Checks ranges of EdgeTrackerOptions; kInvalidArgument naming the field otherwise.
@@ -169,8 +182,14 @@ struct TrackResult {
   Pose T_world_camera = Pose::Identity();  ///< Estimated live camera pose.
   Pose T_camera_ref = Pose::Identity();    ///< Estimated reference -> live camera transform.
   /// Covariance of xi (m^2, rad^2, [rho; phi]) with T_world_camera_true = T_world_camera *
-  /// expSE3(xi), xi in the live camera frame: sigma^2 H^-1 at the final pose (finest level).
+  /// expSE3(xi), xi in the live camera frame: sigma^2 H^-1 at the final pose (finest level), the
+  /// edges' information alone (with a rotation prior it belongs to T_world_camera_edges).
   Matrix6d covariance = Matrix6d::Zero();
+  /// With a rotation prior: the pose the edges alone say, to first order (the prior's information
+  /// taken back out of T_world_camera, whose information is that of `covariance` plus the
+  /// prior's). A filter that predicted the prior fuses this pose with `covariance`, so that its
+  /// attitude is not counted twice. nullopt without a prior (it is then T_world_camera).
+  std::optional<Pose> T_world_camera_edges;
   TrackQuality quality;                        ///< Quality figures.
   TrackingState state = TrackingState::kLost;  ///< kTracking when quality passes the thresholds.
 };
