@@ -177,6 +177,10 @@ void LocalizerArgs::add(CLI::App& app) {
                  "IMU) | off")
       ->check(CLI::IsMember({"filter", "off"}))
       ->capture_default_str();
+  app.add_option("--rotation-prior-scale", rotation_prior_scale,
+                 "Factor on the filter's rotation covariance in the alignment's attitude prior")
+      ->check(CLI::Range(1e-3, 1e6))
+      ->capture_default_str();
   app.add_option("--backend", backend, "Live edges + alignment: auto | vulkan | cpu")
       ->check(CLI::IsMember({"auto", "vulkan", "cpu"}))
       ->capture_default_str();
@@ -198,6 +202,7 @@ void LocalizerArgs::apply(LocalizerOptions& options) const {
   options.inertial.ekf.measurement_covariance_scale = visual_covariance_scale;
   options.report_filtered_pose = frame_pose == "filter";
   options.rotation_prior_from_filter = rotation_prior == "filter";
+  options.rotation_prior_covariance_scale = rotation_prior_scale;
 }
 
 std::vector<std::string> LocalizerArgs::arguments() const {
@@ -216,7 +221,9 @@ std::vector<std::string> LocalizerArgs::arguments() const {
           "--frame-pose",
           frame_pose,
           "--rotation-prior",
-          rotation_prior};
+          rotation_prior,
+          "--rotation-prior-scale",
+          fmt::format("{:g}", rotation_prior_scale)};
 }
 
 void DeviceArgs::add(CLI::App& app) {

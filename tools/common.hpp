@@ -94,6 +94,7 @@ struct LocalizerArgs {
   double visual_covariance_scale = InertialAiding{}.ekf.measurement_covariance_scale;
   std::string frame_pose = "filter";      ///< Tracked frames' pose: filter (the EKF's posterior) | visual.
   std::string rotation_prior = "filter";  ///< Attitude prior of the alignment: filter | off.
+  double rotation_prior_scale = 1.0;      ///< Factor on that prior's covariance.
   void add(CLI::App& app);
   /// Sets the options' backend, policy and keyframe threading; throws Failure on a bad value.
   void apply(LocalizerOptions& options) const;

@@ -68,6 +68,9 @@ Status validateOptions(const LocalizerOptions& o) {
                      "Localizer: need restart_after_refusals >= 0, restart_min_score in 0..1, "
                      "restart_after_refused_s in 0..1e4 and restart_sigma_velocity_m_s in 0..1e3");
   }
+  if (!finiteIn(o.rotation_prior_covariance_scale, 1e-3, 1e6)) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: need rotation_prior_covariance_scale in 1e-3..1e6");
+  }
   const RelocalizationOptions& l = o.relocalization;
   if (l.candidates < 1 || l.candidates > 100 || l.rerank_candidates < 0 || l.rerank_candidates > 1000 ||
       l.refined_probes < 1 || l.refined_probes > 100 || l.depth_steps < 0 || l.depth_steps > 5 ||
@@ -1350,7 +1353,8 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     // A floor of (1e-5 rad)^2 keeps the information finite where the filter reports none smaller.
     RotationPrior prior;
     prior.R_world_camera = prediction->T_world_camera.linear();
-    prior.covariance = 0.5 * (covariance + covariance.transpose()) + 1e-10 * Eigen::Matrix3d::Identity();
+    prior.covariance = m.options.rotation_prior_covariance_scale * 0.5 * (covariance + covariance.transpose()) +
+                       1e-10 * Eigen::Matrix3d::Identity();
     if (prior.covariance.allFinite() && covariance.trace() > 0 &&
         Eigen::LLT<Eigen::Matrix3d>(prior.covariance).info() == Eigen::Success) {
       m.rotation_prior = prior;

@@ -252,6 +252,8 @@ struct LocalizerOptions {
   /// tells from a translation across it. Not for a caller's guess or a relocalization. The
   /// tracker options' own rotation_prior is not used (this sets it per frame).
   bool rotation_prior_from_filter = true;
+  /// Factor on the filter's rotation covariance in that prior (> 1 trusts the gyro less).
+  double rotation_prior_covariance_scale = 1.0;
   /// With kAuto and an Accelerator: time the CPU and device live stages + alignment on the
   /// first frame and keep the faster one (instead of deciding by the device type alone).
   bool calibrate_backend = false;
