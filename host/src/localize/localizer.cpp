@@ -360,6 +360,24 @@ struct Localizer::Impl {
     return r.T_world_camera_edges ? *r.T_world_camera_edges : r.T_world_camera;
   }
 
+  /// The attitude prior of a frame's alignments from the filter's prediction
+  /// (rotation_prior_from_filter): nullopt when off, for a prediction not from the IMU or
+  /// without a rotation covariance (not the EKF's). A floor of (1e-5 rad)^2 keeps the
+  /// information finite where the filter reports none smaller.
+  std::optional<RotationPrior> rotationPriorFrom(const std::optional<MotionPrediction>& prediction) const {
+    if (!options.rotation_prior_from_filter || !prediction || !prediction->inertial) return std::nullopt;
+    const Eigen::Matrix3d covariance = prediction->covariance.bottomRightCorner<3, 3>();
+    RotationPrior prior;
+    prior.R_world_camera = prediction->T_world_camera.linear();
+    prior.covariance = options.rotation_prior_covariance_scale * 0.5 * (covariance + covariance.transpose()) +
+                       1e-10 * Eigen::Matrix3d::Identity();
+    if (!prior.covariance.allFinite() || !(covariance.trace() > 0) ||
+        Eigen::LLT<Eigen::Matrix3d>(prior.covariance).info() != Eigen::Success) {
+      return std::nullopt;
+    }
+    return prior;
+  }
+
   /// Inliers on the finest level of a result (0 unless tracked).
   static double finestInliers(const TrackResult& r) {
     return r.state == TrackingState::kTracking ? r.quality.inlier_ratio * r.quality.points_in_image : 0.0;
@@ -384,8 +402,9 @@ struct Localizer::Impl {
     if (options.max_point_motion_px > 0 && last_pose && tracked_since_reset && !relocalizing) {
       slow = slowPoints(reference, start, *last_pose, options.max_point_motion_px);
     }
-    EdgeTrackerOptions tracker = options.tracker;
-    tracker.rotation_prior = rotation_prior;
+    EdgeTrackerOptions usual = options.tracker;
+    usual.rotation_prior = rotation_prior;
+    EdgeTrackerOptions tracker = usual;
     if (search_level > 0) {
       tracker.coarsest_level = std::max(tracker.coarsest_level, search_level);
       if (tracker.far_first_coarsest_level >= 0) {
@@ -394,17 +413,15 @@ struct Localizer::Impl {
     }
     const EdgeReference& points = slow ? *slow : reference;
     Result<TrackResult> r = backend.align(points, start, tracker);
-    if (r.ok() && (tracker.coarsest_level != options.tracker.coarsest_level ||
-                   tracker.far_first_coarsest_level != options.tracker.far_first_coarsest_level)) {
+    if (r.ok() && (tracker.coarsest_level != usual.coarsest_level ||
+                   tracker.far_first_coarsest_level != usual.far_first_coarsest_level)) {
       // A deep start widens the basin, but where the scene is far and the view wide a coarse
       // level barely tells a translation across the view from a rotation, and the finer levels
       // do not pull back a start that slid along that valley: the alignment from the usual
       // levels is a second hypothesis, and the one with more inliers on the finest level wins.
-      EdgeTrackerOptions usual_tracker = options.tracker;
-      usual_tracker.rotation_prior = rotation_prior;
-      Result<TrackResult> usual = backend.align(points, start, usual_tracker);
-      if (!usual.ok()) return usual.error();
-      if (finestInliers(*usual) > finestInliers(*r)) r = std::move(usual);
+      Result<TrackResult> from_usual = backend.align(points, start, usual);
+      if (!from_usual.ok()) return from_usual.error();
+      if (finestInliers(*from_usual) > finestInliers(*r)) r = std::move(from_usual);
     }
     out.align_ms += msSince(t0);
     return r;
@@ -1347,19 +1364,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     std::optional<RotationPrior>& prior;
     ~ClearOnExit() { prior.reset(); }
   } clear_rotation_prior{m.rotation_prior};
-  m.rotation_prior.reset();
-  if (m.options.rotation_prior_from_filter && !T_world_camera_guess && prediction && prediction->inertial) {
-    const Eigen::Matrix3d covariance = prediction->covariance.bottomRightCorner<3, 3>();
-    // A floor of (1e-5 rad)^2 keeps the information finite where the filter reports none smaller.
-    RotationPrior prior;
-    prior.R_world_camera = prediction->T_world_camera.linear();
-    prior.covariance = m.options.rotation_prior_covariance_scale * 0.5 * (covariance + covariance.transpose()) +
-                       1e-10 * Eigen::Matrix3d::Identity();
-    if (prior.covariance.allFinite() && covariance.trace() > 0 &&
-        Eigen::LLT<Eigen::Matrix3d>(prior.covariance).info() == Eigen::Success) {
-      m.rotation_prior = prior;
-    }
-  }
+  m.rotation_prior = T_world_camera_guess ? std::nullopt : m.rotationPriorFrom(prediction);
   auto alignFrom = [&](const Pose& start) { return m.align(*m.active, gray, start, out, m.live_levels); };
   Result<TrackResult> aligned = alignFrom(guess);
   if (!aligned.ok()) return aligned.error();

@@ -308,8 +308,7 @@ Status validateEdgeTrackerOptions(const EdgeTrackerOptions& o) {
       return makeError(ErrorCode::kInvalidArgument, "edge tracker: rotation_prior's R_world_camera is not a rotation");
     }
     const Eigen::Matrix3d& C = o.rotation_prior->covariance;
-    const bool finite = C.allFinite();
-    if (!finite || (C - C.transpose()).cwiseAbs().maxCoeff() > 1e-9 * C.cwiseAbs().maxCoeff() ||
+    if (!C.allFinite() || (C - C.transpose()).cwiseAbs().maxCoeff() > 1e-9 * C.cwiseAbs().maxCoeff() ||
         Eigen::LLT<Eigen::Matrix3d>(C).info() != Eigen::Success) {
       return makeError(ErrorCode::kInvalidArgument,
                        "edge tracker: rotation_prior's covariance must be finite, symmetric and positive definite");

@@ -87,8 +87,6 @@ inline double tDistributionWeight(double r, double sigma, double nu) {
 EdgeNormalEquations accumulateEdgeNormalEquations(const std::vector<EdgePoint>& points, const Pose& T_camera_ref,
                                                   const LiveLevel& level, double sigma_px, double nu);
 
-/// Options of trackFrame. Why the defaults are what they are (the sequences and frames they were
-/// measured on) is in the README, "Tracker defaults".
 /// A Gaussian prior on the live camera's attitude: R_world_camera_true = R_world_camera *
 /// expSO3(phi), phi ~ N(0, covariance) in the camera frame (rad^2; the rotation block of a
 /// MotionPrediction's covariance).
@@ -97,6 +95,8 @@ struct RotationPrior {
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
 };
 
+/// Options of trackFrame. Why the defaults are what they are (the sequences and frames they were
+/// measured on) is in the README, "Tracker defaults".
 struct EdgeTrackerOptions {
   double nu = 5.0;           ///< Degrees of freedom of the t-distribution weights.
   int scale_iterations = 5;  ///< Fixed-point iterations of the scale per GN iteration.
