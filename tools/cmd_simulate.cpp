@@ -40,6 +40,7 @@ struct SimulateArgs {
   double vignetting = 0;
   std::string noise;  ///< "shot,read".
   int motion_blur = 1;
+  int supersample = 1;
   double exposure_time_s = 0;
   int jpeg_quality = 0;
   bool png = false;
@@ -80,6 +81,7 @@ void applyOverrides(const CLI::App& cmd, const SimulateArgs& a, SimulationOption
   }
   if (given(cmd, "--motion-blur")) ap.motion_blur_subframes = a.motion_blur;
   if (given(cmd, "--exposure-time")) ap.exposure_time_s = a.exposure_time_s;
+  if (given(cmd, "--supersample")) ap.supersampling = a.supersample;
   if (given(cmd, "--jpeg")) {
     o.jpeg = true;
     o.jpeg_quality = a.jpeg_quality;
@@ -223,6 +225,8 @@ static void addSimulateVerb(CLI::App& app) {
   cmd->add_option("--noise", args->noise, "Sensor noise 'shot,read' sigmas (linear 0..1 units)");
   cmd->add_option("--motion-blur", args->motion_blur, "Sub-frames averaged per image (1 = none)");
   cmd->add_option("--exposure-time", args->exposure_time_s, "Shutter time for motion blur, seconds");
+  cmd->add_option("--supersample", args->supersample,
+                  "Samples per pixel along each axis, box-averaged (1..4; 1 = one at the centre, aliased edges)");
   cmd->add_option("--jpeg", args->jpeg_quality, "Write JPEG images with this quality (1..100)");
   cmd->add_flag("--png", args->png, "Write PNG images (lossless)");
   cmd->add_option("--holes", args->holes, "Fraction of the model's area removed in patches (0..0.9)");

@@ -54,6 +54,8 @@ Status validateOptions(const SimulationOptions& o) {
   const AppearanceOptions& a = o.appearance;
   if (a.motion_blur_subframes < 1 || a.motion_blur_subframes > 64)
     return bad(fmt::format("motion blur sub-frames {} is outside 1..64", a.motion_blur_subframes));
+  if (a.supersampling < 1 || a.supersampling > 4)
+    return bad(fmt::format("supersampling {} is outside 1..4", a.supersampling));
   if (!(a.exposure_time_s >= 0.0 && a.exposure_time_s <= 1.0))
     return bad(fmt::format("exposure time {} s is outside 0..1", a.exposure_time_s));
   if (!(a.gamma >= 0.1 && a.gamma <= 10.0)) return bad(fmt::format("gamma {} is outside 0.1..10", a.gamma));
@@ -175,9 +177,9 @@ Result<Model> scenarioModel(const std::string& scene) {
 
 namespace {
 
-/// One render in linear RGB, lit and with the sky painted.
-Result<ImageF32> renderLinear(Renderer& renderer, const PinholeCamera& camera, const Pose& T_world_camera,
-                              const RenderSettings& settings, const AppearanceOptions& a, const ShadowMap* map) {
+/// One render in linear RGB, lit and with the sky painted, one sample per pixel.
+Result<ImageF32> renderSamples(Renderer& renderer, const PinholeCamera& camera, const Pose& T_world_camera,
+                               const RenderSettings& settings, const AppearanceOptions& a, const ShadowMap* map) {
   auto rendered = renderer.render(camera, T_world_camera, settings);
   if (!rendered.ok()) return rendered.error();
   ImageF32 linear = decodeRender(rendered->rgba);
@@ -191,12 +193,46 @@ Result<ImageF32> renderLinear(Renderer& renderer, const PinholeCamera& camera, c
   return linear;
 }
 
+/// One render in linear RGB with AppearanceOptions::supersampling samples per pixel and axis:
+/// rendered n times larger and box-averaged. Pixel (i, j) of `camera` has its centre at (i, j)
+/// (core/camera.hpp), and its n x n samples at i + (k + 0.5) / n - 0.5, k = 0..n-1: the large
+/// camera's pixel n i + k, i.e. f' = n f and c' = n c + (n - 1) / 2.
+Result<ImageF32> renderLinear(Renderer& renderer, const PinholeCamera& camera, const Pose& T_world_camera,
+                              const RenderSettings& settings, const AppearanceOptions& a, const ShadowMap* map) {
+  const int n = a.supersampling;
+  if (n <= 1) return renderSamples(renderer, camera, T_world_camera, settings, a, map);
+  const double half = 0.5 * (n - 1);
+  const PinholeCamera large{n * camera.fx,        n * camera.fy,    n * camera.cx + half,
+                            n * camera.cy + half, n * camera.width, n * camera.height};
+  auto samples = renderSamples(renderer, large, T_world_camera, settings, a, map);
+  if (!samples.ok()) return samples.error();
+  const ImageF32& big = *samples;
+  ImageF32 out(camera.width, camera.height, 3, 0.0f);
+  const float inv = 1.0f / static_cast<float>(n * n);
+  for (int y = 0; y < camera.height; ++y) {
+    for (int x = 0; x < camera.width; ++x) {
+      float sum[3] = {0, 0, 0};
+      for (int dy = 0; dy < n; ++dy) {
+        for (int dx = 0; dx < n; ++dx) {
+          for (int c = 0; c < 3; ++c) sum[c] += big.at(n * x + dx, n * y + dy, c);
+        }
+      }
+      for (int c = 0; c < 3; ++c) out.at(x, y, c) = sum[c] * inv;
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 Result<ImageU8> simulateFrame(Renderer& renderer, const SplineTrajectory& trajectory, const Pose& T_body_camera,
                               const PinholeCamera& camera, int64_t t_ns, const AppearanceOptions& a,
                               const ShadowMap* map, const RenderSettings& base_settings, uint64_t noise_seed,
                               const LensRig* rig) {
+  if (a.supersampling < 1 || a.supersampling > 4) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     fmt::format("simulate: supersampling {} is outside 1..4", a.supersampling));
+  }
   const bool lighting = a.lighting.enabled && map != nullptr;
   RenderSettings settings = base_settings;
   settings.outputs = kRenderColor | kRenderDepth | (lighting ? kRenderNormals : 0u);

@@ -65,7 +65,12 @@ struct AppearanceOptions {
   double read_noise = 0.0;                       ///< Read noise sigma, linear 0..1 units.
   int motion_blur_subframes = 1;                 ///< Renders averaged per image (1 = no blur).
   double exposure_time_s = 0.0;                  ///< Shutter time centred on the image time, seconds.
-  std::optional<std::array<double, 3>> sky;      ///< Linear RGB painted where no surface is seen (none: black).
+  /// Samples per pixel along each axis: every render (each sub-frame, each cube face of a lens) is
+  /// made at this many times the resolution and box-averaged in linear light, so a pixel
+  /// integrates its footprint as a sensor does (1..4; 1 = one sample at the pixel centre: hard,
+  /// aliased edges, and the same rasterizer the tracker renders its references with).
+  int supersampling = 1;
+  std::optional<std::array<double, 3>> sky;  ///< Linear RGB painted where no surface is seen (none: black).
 };
 
 /// sRGB transfer function (IEC 61966-2-1): encoded 0..1 -> linear 0..1, and back.
