@@ -126,6 +126,11 @@ void ViewArgs::add(CLI::App& app) {
                  "--view-size is a central crop; else 90)");
   app.add_option("--view-pitch", pitch_deg, "Stabilised view: axis angle below the horizon, degrees (90 = down)")
       ->capture_default_str();
+  app.add_option("--view-flat-field", flat_field_sigma_px,
+                 "Divide the view by its local mean brightness (Gaussian sigma, view pixels; 0 = off): evens out "
+                 "vignetting before the edge thresholds")
+      ->check(CLI::Range(0.0, 1e4))
+      ->capture_default_str();
 }
 
 ViewOptions ViewArgs::options(const Sequence& seq) const {
@@ -142,6 +147,7 @@ ViewOptions ViewArgs::options(const Sequence& seq) const {
   }
   o.hfov_deg = hfov_deg;
   o.pitch_deg = pitch_deg;
+  o.flat_field_sigma_px = flat_field_sigma_px;
   o.interpolation = interpolation == "bicubic" ? RemapInterpolation::kBicubic : RemapInterpolation::kBilinear;
   if (seq.gravity_world.norm() > 0) o.up_world = -seq.gravity_world.normalized();
   return o;

@@ -216,6 +216,54 @@ TEST(CameraFront, ASmallerViewOfAPinholeLensIsTheCentralCropAtItsScale) {
   EXPECT_EQ((*stabilised)->view().cx, 0.5 * (o.width - 1));
 }
 
+TEST(CameraFront, AFlatFieldEvensOutAFalloffAndLeavesAnEvenImage) {
+  // An ideal pinhole lens (the view is its own image) seeing a 16-px checkerboard of gray levels
+  // 60 and 180 under a falloff from 1 on the left to 0.25 on the right.
+  LensCamera lens;
+  lens.intrinsics = test::localizeCamera();
+  const int w = lens.intrinsics.width, h = lens.intrinsics.height;
+  ImageU8 even(w, h, 1), falloff(w, h, 1);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const double level = ((x / 16 + y / 16) % 2) ? 180.0 : 60.0;
+      even.at(x, y) = static_cast<uint8_t>(level);
+      falloff.at(x, y) = static_cast<uint8_t>(std::lround(level * (1.0 - 0.75 * x / (w - 1.0))));
+    }
+  }
+  // Contrast (mean |horizontal step| across the squares' vertical edges) of the 64 columns at
+  // either side.
+  auto contrast = [&](const ImageU8& img, int x0) {
+    double sum = 0;
+    int n = 0;
+    for (int y = 0; y < h; ++y) {
+      for (int x = std::max(x0, 1); x < x0 + 64; ++x) {
+        if (x % 16 != 0) continue;
+        sum += std::abs(img.at(x, y) - img.at(x - 1, y));
+        ++n;
+      }
+    }
+    return sum / n;
+  };
+  ViewOptions o;
+  o.flat_field_sigma_px = 40;
+  auto front = CameraFront::create(lens, o);
+  ASSERT_TRUE(front.ok()) << front.error().message;
+  EXPECT_FALSE((*front)->identity());  // the flat field runs on an ideal lens's image too
+  ImageU8 flat, flat_even;
+  ASSERT_TRUE((*front)->remap(falloff, Eigen::Matrix3d::Identity(), flat).ok());
+  ASSERT_TRUE((*front)->remap(even, Eigen::Matrix3d::Identity(), flat_even).ok());
+  const double before = contrast(falloff, 0) / contrast(falloff, w - 64);
+  const double after = contrast(flat, 0) / contrast(flat, w - 64);
+  EXPECT_GT(before, 2.5);
+  EXPECT_NEAR(after, 1.0, 0.2) << "left/right contrast " << before << " -> " << after;
+  // An evenly lit image keeps its levels (within 8 %: the local mean of a checkerboard ripples).
+  int worst = 0;
+  for (size_t i = 0; i < even.data.size(); ++i) worst = std::max(worst, std::abs(flat_even.data[i] - even.data[i]));
+  EXPECT_LE(worst, 15);
+  o.flat_field_sigma_px = -1;
+  EXPECT_FALSE(CameraFront::create(lens, o).ok());
+}
+
 TEST(CameraFront, BadInputIsAClearError) {
   auto front = CameraFront::create(radtanLens(), ViewOptions{});
   ASSERT_TRUE(front.ok());

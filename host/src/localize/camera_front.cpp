@@ -43,6 +43,9 @@ Result<std::unique_ptr<CameraFront>> CameraFront::create(const LensCamera& lens,
   if (!(options.hfov_deg == 0 || (options.hfov_deg >= 1 && options.hfov_deg <= 170))) {
     return bad(fmt::format("hfov {} deg is outside 1..170 (0: default)", options.hfov_deg));
   }
+  if (!(options.flat_field_sigma_px >= 0 && options.flat_field_sigma_px <= 1e4)) {
+    return bad(fmt::format("flat field sigma {} px is outside 0..1e4", options.flat_field_sigma_px));
+  }
   if (!(options.pitch_deg >= -89 && options.pitch_deg <= 90)) {
     return bad(fmt::format("pitch {} deg is outside -89..90", options.pitch_deg));
   }
@@ -72,8 +75,9 @@ Result<std::unique_ptr<CameraFront>> CameraFront::create(const LensCamera& lens,
     const double f = 0.5 * w / std::tan(0.5 * hfov * M_PI / 180.0);
     front->view_ = PinholeCamera{f, f, 0.5 * (w - 1), 0.5 * (h - 1), w, h};
   }
-  front->identity_ = keep_intrinsics && lens.isIdealPinhole();
-  if (front->identity_) {
+  front->same_pixels_ = keep_intrinsics && lens.isIdealPinhole();
+  front->identity_ = front->same_pixels_ && options.flat_field_sigma_px == 0;
+  if (front->same_pixels_) {
     front->valid_fraction_ = 1.0;
     return front;
   }
@@ -227,8 +231,9 @@ Status CameraFront::remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_ca
                      fmt::format("camera front: image is {}x{} with {} channel(s); the calibration is {}x{} gray",
                                  lens_image.width, lens_image.height, lens_image.channels, k.width, k.height));
   }
-  if (identity_) {
+  if (same_pixels_) {  // no remap; the flat field alone, if any
     view_image = lens_image;
+    if (!identity_) flatten(view_image);
     return Status::success();
   }
   const RemapTable& t = table(R_camera_view);
@@ -243,6 +248,7 @@ Status CameraFront::remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_ca
     Result<ImageU8> out = remapper_->remap(lens_image);
     if (!out.ok()) return out.error();
     view_image = std::move(out).value();
+    if (options_.flat_field_sigma_px > 0) flatten(view_image);
     return Status::success();
   }
   const cv::Mat src(k.height, k.width, CV_8UC1, const_cast<uint8_t*>(lens_image.data.data()));
@@ -255,7 +261,41 @@ Status CameraFront::remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_ca
     cv::remap(src, dst, uv, cv::Mat(), interpolation, cv::BORDER_REPLICATE);
   }
   for (uint32_t i : no_source_) view_image.data[i] = 0;
+  if (options_.flat_field_sigma_px > 0) flatten(view_image);
   return Status::success();
+}
+
+void CameraFront::flatten(ImageU8& view_image) const {
+  const int w = view_image.width, h = view_image.height;
+  cv::Mat image(h, w, CV_8UC1, view_image.data.data());
+  cv::Mat value;
+  image.convertTo(value, CV_32F);
+  cv::Mat weight(h, w, CV_32F, cv::Scalar(1.0f));
+  float* weights = weight.ptr<float>();
+  for (uint32_t i : no_source_) weights[i] = 0.0f;
+  // The local mean: a normalized convolution (sum of w I over sum of w, Gaussian weights) at
+  // 1/k scale, k a power of two up to 8 that leaves sigma >= 2 of its pixels, then bilinear back.
+  const double sigma = options_.flat_field_sigma_px;
+  int k = 1;
+  while (k < 8 && sigma / (2 * k) >= 2.0) k *= 2;
+  const cv::Size small_size((w + k - 1) / k, (h + k - 1) / k);
+  cv::Mat weighted = value.mul(weight), small_value, small_weight;
+  cv::resize(weighted, small_value, small_size, 0, 0, cv::INTER_AREA);
+  cv::resize(weight, small_weight, small_size, 0, 0, cv::INTER_AREA);
+  cv::GaussianBlur(small_value, small_value, cv::Size(0, 0), sigma / k, sigma / k, cv::BORDER_REFLECT);
+  cv::GaussianBlur(small_weight, small_weight, cv::Size(0, 0), sigma / k, sigma / k, cv::BORDER_REFLECT);
+  cv::Mat local = small_value / cv::max(small_weight, 1e-3);
+  cv::Mat local_full;
+  cv::resize(local, local_full, cv::Size(w, h), 0, 0, cv::INTER_LINEAR);
+  const double total_weight = cv::sum(weight)[0];
+  if (!(total_weight > 0)) return;
+  const double mean = cv::sum(weighted)[0] / total_weight;
+  // A floor on the local mean (5 % of the image's, one gray level) keeps near-black regions from
+  // being lifted into noise.
+  const float floor_value = static_cast<float>(std::max(1.0, 0.05 * mean));
+  cv::Mat flat = value.mul(static_cast<float>(mean) / cv::max(local_full, floor_value));
+  flat.convertTo(image, CV_8U);  // rounds and saturates into the view's own buffer
+  for (uint32_t i : no_source_) view_image.data[i] = 0;
 }
 
 void CameraFront::setRemapper(std::unique_ptr<ImageRemapper> remapper) {

@@ -49,6 +49,12 @@ struct ViewOptions {
   /// kStabilised: the remap table is computed exactly every grid_step_px view pixels and
   /// bilinearly in between (1 = every pixel; 1..32).
   int grid_step_px = 8;
+  /// Flat field: the view divided by its local mean brightness (a Gaussian of this sigma, view
+  /// pixels, over the pixels that have a source) and multiplied by the image's mean, so that a
+  /// smooth falloff of brightness (a lens's vignetting, seen off its axis by a stabilised view,
+  /// a darker side of the scene) does not push one part's edges below the edge detector's
+  /// thresholds, which are quantiles of the whole image. 0 = off (0..1e4).
+  double flat_field_sigma_px = 0;
 };
 
 /// Lens image -> view image. Not thread-safe (it caches the last table).
@@ -61,7 +67,8 @@ class CameraFront {
   const LensCamera& lens() const { return lens_; }
   const PinholeCamera& view() const { return view_; }
   const ViewOptions& options() const { return options_; }
-  /// True when the view needs no remap at all (an ideal pinhole lens, kUndistorted, own size).
+  /// True when the view needs no remap at all (an ideal pinhole lens, kUndistorted, own size,
+  /// no flat field).
   bool identity() const { return identity_; }
 
   /// R_camera_view for a camera at attitude R_world_camera: identity for kUndistorted.
@@ -96,13 +103,15 @@ class CameraFront {
   CameraFront() = default;
   void fillGrid(const Eigen::Matrix3d& R_camera_view, int step, RemapTable& table) const;
   bool sourceOf(const Eigen::Matrix3d& R_camera_view, double u, double v, float& su, float& sv) const;
-  void buildMaps();  ///< maps_ from table_ (a cached table remapped by OpenCV).
+  void buildMaps();                         ///< maps_ from table_ (a cached table remapped by OpenCV).
+  void flatten(ImageU8& view_image) const;  ///< ViewOptions::flat_field_sigma_px, in place.
 
   LensCamera lens_;
   PinholeCamera view_;
   ViewOptions options_;
   Eigen::Vector3d up_world_{0, 0, 1};
   bool identity_ = false;
+  bool same_pixels_ = false;  ///< The view's pixels are the lens image's (a flat field may follow).
   RemapTable table_;
   Eigen::Matrix3d table_rotation_ = Eigen::Matrix3d::Zero();
   bool table_valid_ = false;
