@@ -76,7 +76,6 @@ Result<std::unique_ptr<CameraFront>> CameraFront::create(const LensCamera& lens,
     front->view_ = PinholeCamera{f, f, 0.5 * (w - 1), 0.5 * (h - 1), w, h};
   }
   front->same_pixels_ = keep_intrinsics && lens.isIdealPinhole();
-  front->identity_ = front->same_pixels_ && options.flat_field_sigma_px == 0;
   if (front->same_pixels_) {
     front->valid_fraction_ = 1.0;
     return front;
@@ -231,9 +230,15 @@ Status CameraFront::remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_ca
                      fmt::format("camera front: image is {}x{} with {} channel(s); the calibration is {}x{} gray",
                                  lens_image.width, lens_image.height, lens_image.channels, k.width, k.height));
   }
-  if (same_pixels_) {  // no remap; the flat field alone, if any
+  VKLOC_TRY_STATUS(resample(lens_image, R_camera_view, view_image));
+  if (options_.flat_field_sigma_px > 0) flatten(view_image);
+  return Status::success();
+}
+
+Status CameraFront::resample(const ImageU8& lens_image, const Eigen::Matrix3d& R_camera_view, ImageU8& view_image) {
+  const PinholeCamera& k = lens_.intrinsics;
+  if (same_pixels_) {  // no remap
     view_image = lens_image;
-    if (!identity_) flatten(view_image);
     return Status::success();
   }
   const RemapTable& t = table(R_camera_view);
@@ -248,7 +253,6 @@ Status CameraFront::remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_ca
     Result<ImageU8> out = remapper_->remap(lens_image);
     if (!out.ok()) return out.error();
     view_image = std::move(out).value();
-    if (options_.flat_field_sigma_px > 0) flatten(view_image);
     return Status::success();
   }
   const cv::Mat src(k.height, k.width, CV_8UC1, const_cast<uint8_t*>(lens_image.data.data()));
@@ -261,7 +265,6 @@ Status CameraFront::remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_ca
     cv::remap(src, dst, uv, cv::Mat(), interpolation, cv::BORDER_REPLICATE);
   }
   for (uint32_t i : no_source_) view_image.data[i] = 0;
-  if (options_.flat_field_sigma_px > 0) flatten(view_image);
   return Status::success();
 }
 

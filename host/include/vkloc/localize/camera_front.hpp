@@ -69,7 +69,7 @@ class CameraFront {
   const ViewOptions& options() const { return options_; }
   /// True when the view needs no remap at all (an ideal pinhole lens, kUndistorted, own size,
   /// no flat field).
-  bool identity() const { return identity_; }
+  bool identity() const { return same_pixels_ && options_.flat_field_sigma_px == 0; }
 
   /// R_camera_view for a camera at attitude R_world_camera: identity for kUndistorted.
   Eigen::Matrix3d viewRotation(const Eigen::Matrix3d& R_world_camera) const;
@@ -105,12 +105,13 @@ class CameraFront {
   bool sourceOf(const Eigen::Matrix3d& R_camera_view, double u, double v, float& su, float& sv) const;
   void buildMaps();                         ///< maps_ from table_ (a cached table remapped by OpenCV).
   void flatten(ImageU8& view_image) const;  ///< ViewOptions::flat_field_sigma_px, in place.
+  /// remap() without the size check and the flat field.
+  Status resample(const ImageU8& lens_image, const Eigen::Matrix3d& R_camera_view, ImageU8& view_image);
 
   LensCamera lens_;
   PinholeCamera view_;
   ViewOptions options_;
   Eigen::Vector3d up_world_{0, 0, 1};
-  bool identity_ = false;
   bool same_pixels_ = false;  ///< The view's pixels are the lens image's (a flat field may follow).
   RemapTable table_;
   Eigen::Matrix3d table_rotation_ = Eigen::Matrix3d::Zero();
