@@ -42,6 +42,7 @@ struct RelocBenchArgs {
   int refined = RelocalizationOptions{}.refined_probes;
   int rerank = RelocalizationOptions{}.rerank_candidates;
   bool top_first = RelocalizationOptions{}.top_candidate_first;
+  bool feature_starts = RelocalizationOptions{}.feature_starts;
   bool confirm_start = RelocalizationOptions{}.confirm_start;
   std::string keyframes = "sync";
   int trials = 0;              ///< Forced-loss or start trials (0: none).
@@ -83,6 +84,7 @@ std::unique_ptr<Localizer> makeLocalizer(const Setup& s, const RelocBenchArgs& a
   options.relocalization.refined_probes = a.refined;
   options.relocalization.rerank_candidates = a.rerank;
   options.relocalization.top_candidate_first = a.top_first;
+  options.relocalization.feature_starts = a.feature_starts;
   options.relocalization.confirm_start = a.confirm_start;
   auto localizer = take(Localizer::create(s.model, s.camera, options, s.accelerator));
   check(localizer->setKeyframeDatabase(s.db));
@@ -151,7 +153,7 @@ void runQueries(const Setup& s, const RelocBenchArgs& a) {
     csv = take(PartialFileWriter::open(a.csv));
     check(csv->appendLine(
         "frame,top_distance_bits,top_m,top_deg,state,t_err_m,r_err_deg,depth_m,verify_score,candidates,ms,ranked_m,"
-        "ranked_deg"));
+        "ranked_deg,feature_starts"));
   }
   size_t retrieved = 0, retrieved_ranked = 0, recovered = 0, wrong = 0, in_window = 0;
   std::vector<double> top_m, top_deg, ranked_m, ranked_deg, recover_ms;
@@ -203,10 +205,10 @@ void runQueries(const Setup& s, const RelocBenchArgs& a) {
     wrong += relocalized && !good;
     recover_ms.push_back(r.total_ms);
     if (csv) {
-      check(csv->appendLine(fmt::format("{},{},{:.4f},{:.3f},{},{:.5f},{:.4f},{:.3f},{:.4f},{},{:.1f},{:.4f},{:.3f}", i,
-                                        bits, dm, ddeg, trackingStateName(r.state), relocalized ? t_err : NAN,
-                                        relocalized ? r_err : NAN, r.scene_depth_m, r.verify_score,
-                                        r.relocalization_candidates, r.total_ms, rm, rdeg)));
+      check(csv->appendLine(fmt::format(
+          "{},{},{:.4f},{:.3f},{},{:.5f},{:.4f},{:.3f},{:.4f},{},{:.1f},{:.4f},{:.3f},{}", i, bits, dm, ddeg,
+          trackingStateName(r.state), relocalized ? t_err : NAN, relocalized ? r_err : NAN, r.scene_depth_m,
+          r.verify_score, r.relocalization_candidates, r.total_ms, rm, rdeg, r.relocalization_feature_starts)));
     }
     if ((q + 1) % 10 == 0 || q + 1 == queries.size()) {
       std::fprintf(stderr, "bench reloc: %zu/%zu queries, %zu recovered, %.0f s\n", q + 1, queries.size(), recovered,
@@ -434,6 +436,11 @@ void addRelocBench(CLI::App& bench) {
                    "true | false)")
       ->capture_default_str();
   reloc->add_option("--top-first", args->top_first, "Align the best-ranked candidate's best probe first (true | false)")
+      ->capture_default_str();
+  reloc
+      ->add_option("--feature-starts", args->feature_starts,
+                   "Also start the alignment from ORB point features matched with each candidate's render (a RANSAC "
+                   "PnP on its depth; true | false)")
       ->capture_default_str();
   reloc->add_option("--refined", args->refined, "Probed starts aligned fully per search")
       ->check(CLI::Range(1, 100))

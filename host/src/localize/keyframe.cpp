@@ -42,6 +42,7 @@ Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeReques
   t0 = SteadyClock::now();
   keyframe->scene_depth_m = medianDepth(view->depth);
   if (request.keep_gray) keyframe->gray = view->gray;
+  if (request.keep_depth) keyframe->depth = view->depth;
   // The render's depth and normals are handed to the reference stage (no 5 MB copy).
   Result<EdgeReference> reference = buildEdgeReference(std::move(*view), camera_, request.T_world_ref, reference_);
   if (!reference.ok()) return reference.error();

@@ -90,6 +90,11 @@ Status validateOptions(const LocalizerOptions& o) {
         "min_response in 0..1, agreeing_candidates and agreement_probes in 0..100, agree_depth_fraction in "
         "0..1 and agree_deg in 0..180");
   }
+  if (l.feature_starts) VKLOC_TRY_STATUS(validateFeaturePoseOptions(l.features));
+  if (!finiteIn(l.feature_agree_fraction, 0.0, 1.0) || !finiteIn(l.feature_agree_deg, 0.0, 180.0)) {
+    return makeError(ErrorCode::kInvalidArgument,
+                     "Localizer: relocalization needs feature_agree_fraction in 0..1 and feature_agree_deg in 0..180");
+  }
   if (!finiteIn(o.max_point_motion_px, 0.0, 1e6)) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: max_point_motion_px must be in 0..1e6");
   }
@@ -668,9 +673,11 @@ struct Localizer::Impl {
       std::shared_ptr<const Keyframe> keyframe;
       size_t candidate = 0;  ///< Database index of the keyframe it started from.
       Pose start = Pose::Identity();
-      double inliers = 0;  ///< Above chance, on the deepest level.
+      double inliers = 0;       ///< Above chance, on the deepest level.
+      int feature_inliers = 0;  ///< RANSAC inliers of a start from point features (0: another start).
     };
     std::vector<Probe> probes;
+    std::optional<PointFeatures> live_features;  ///< Of the live image, once a render needs them.
     KeyframeRequest request;
     request.t_ns = t_ns;
     request.frame_index = frame_index;
@@ -678,7 +685,8 @@ struct Localizer::Impl {
       ++out.relocalization_candidates;
       const Pose& T_candidate = database->keyframes()[c.index].T_world_camera;
       request.T_world_ref = T_candidate;
-      request.keep_gray = o.shift_starts > 0;
+      request.keep_gray = o.shift_starts > 0 || o.feature_starts;
+      request.keep_depth = o.feature_starts;
       VKLOC_TRY_STATUS(keyframes->makeNow(request, out.render_ms, out.reference_ms));
       // The backends hold the keyframe the probes align against (a device backend keeps it).
       VKLOC_TRY_STATUS(uploadKeyframe());
@@ -718,6 +726,33 @@ struct Localizer::Impl {
           }
         }
       }
+      // The pose of point features matched with the render (its own depth: no depth steps).
+      if (o.feature_starts && !keyframe->gray.data.empty() && !keyframe->depth.data.empty()) {
+        const auto t_features = SteadyClock::now();
+        if (!live_features) {
+          Result<PointFeatures> detected = detectPointFeatures(gray, o.features.max_features);
+          if (!detected.ok()) return detected.error();
+          live_features = std::move(detected).value();
+        }
+        Result<PointFeatures> render_features = detectPointFeatures(keyframe->gray, o.features.max_features);
+        if (!render_features.ok()) return render_features.error();
+        Result<std::optional<FeaturePose>> pose =
+            featurePose(*live_features, *render_features, keyframe->depth, camera, T_candidate, o.features);
+        if (!pose.ok()) return pose.error();
+        if (pose->has_value() && isValidPose((*pose)->T_world_camera)) {
+          // Aligned fully from the feature pose itself (no probe on the deepest level, whose
+          // few points can wander decimetres from a start a few centimetres off); ranked by
+          // feature support below.
+          Probe p;
+          p.keyframe = keyframe;
+          p.candidate = c.index;
+          p.start = (*pose)->T_world_camera;
+          p.feature_inliers = (*pose)->inliers;
+          probes.push_back(std::move(p));
+          ++out.relocalization_feature_starts;
+        }
+        out.align_ms += msSince(t_features);
+      }
       const auto t_probe = SteadyClock::now();
       for (const Pose& start : starts) {
         Result<TrackResult> r = active->align(keyframe->reference, start, probe);
@@ -742,6 +777,40 @@ struct Localizer::Impl {
       const size_t top = candidates.front().index;
       auto it = std::find_if(probes.begin(), probes.end(), [top](const Probe& p) { return p.candidate == top; });
       if (it != probes.end()) std::rotate(probes.begin(), it, std::next(it));
+    }
+    if (o.feature_starts) {
+      // Probes from feature poses go first, by their support: the RANSAC inliers of every feature
+      // start that agrees with theirs (from any candidate's render, within feature_agree_fraction
+      // of the scene depth and feature_agree_deg). One render's pose alone can be wrong with
+      // many inliers: a texture the model repeats (books on shelves, a poster twice) matches as
+      // well at the wrong copy, and the poses of several renders then outvote it.
+      std::vector<std::pair<int, size_t>> supported;  // (inliers of the agreeing starts, probe)
+      for (size_t i = 0; i < probes.size(); ++i) {
+        const Probe& a = probes[i];
+        if (a.feature_inliers == 0) continue;
+        const double depth_m = a.keyframe->scene_depth_m;
+        int support = 0;
+        for (const Probe& b : probes) {
+          if (b.feature_inliers == 0) continue;
+          if ((a.start.translation() - b.start.translation()).norm() <= o.feature_agree_fraction * depth_m &&
+              rotationAngleDeg(a.start.linear().transpose() * b.start.linear()) <= o.feature_agree_deg) {
+            support += b.feature_inliers;
+          }
+        }
+        supported.emplace_back(support, i);
+      }
+      std::stable_sort(supported.begin(), supported.end(),
+                       [](const auto& a, const auto& b) { return a.first > b.first; });
+      std::vector<Probe> ordered;
+      std::vector<char> moved(probes.size(), 0);
+      for (const auto& [support, i] : supported) {
+        ordered.push_back(probes[i]);
+        moved[i] = 1;
+      }
+      for (size_t i = 0; i < probes.size(); ++i) {
+        if (!moved[i]) ordered.push_back(std::move(probes[i]));
+      }
+      probes = std::move(ordered);
     }
     // A refined pose verified at tracking's score; taken alone at min_score, or when alignments
     // from agreeing_candidates different keyframes reached it.
@@ -776,6 +845,7 @@ struct Localizer::Impl {
       return chosen;
     };
     request.keep_gray = false;
+    request.keep_depth = false;
     auto refine = [&](const Probe& p) -> Status {
       keyframes->restore(p.keyframe);
       VKLOC_TRY_STATUS(uploadKeyframe());

@@ -32,6 +32,7 @@ struct KeyframeRequest {
   int64_t frame_index = 0;              ///< Index of that frame (the Localizer's count; may lie ahead).
   EdgeKindMask dropped_kinds{};         ///< Edge kinds left out.
   bool keep_gray = false;               ///< Keep the render's gray image in Keyframe::gray.
+  bool keep_depth = false;              ///< Keep the render's depth in Keyframe::depth.
 };
 
 /// A finished keyframe. Immutable once made; shared between the worker and the tracker.
@@ -41,6 +42,7 @@ struct Keyframe {
   EdgeReference reference;   ///< Edge points per pyramid level, keyframe camera frame (T_world_ref).
   double scene_depth_m = 0;  ///< Median depth of the render's surfaces, metres (0: nothing seen).
   ImageU8 gray;              ///< The render's gray image when request.keep_gray (else empty).
+  ImageF32 depth;            ///< The render's depth (camera z, metres) when request.keep_depth.
   double render_ms = 0;      ///< Wall time of the render, ms.
   double reference_ms = 0;   ///< Wall time of the edge-point extraction, ms.
 };

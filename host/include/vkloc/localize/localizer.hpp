@@ -35,6 +35,7 @@
 #include "vkloc/core/status.hpp"
 #include "vkloc/fusion/sensors.hpp"
 #include "vkloc/localize/camera_front.hpp"
+#include "vkloc/localize/feature_pose.hpp"
 #include "vkloc/localize/image_content.hpp"
 #include "vkloc/localize/initializer.hpp"
 #include "vkloc/localize/keyframe_database.hpp"
@@ -134,6 +135,16 @@ struct RelocalizationOptions {
   /// (besides the candidate's own pose), with at least min_response (0..1).
   int shift_starts = 2;
   double min_response = 0.05;
+  /// Each candidate's render also gives a start from ORB point features matched with the live
+  /// image and lifted to 3D by the render's depth (a RANSAC PnP, localize/feature_pose.hpp): a
+  /// start from many points' geometry, where the candidate's pose is outside the alignment's basin.
+  bool feature_starts = true;
+  FeaturePoseOptions features;
+  /// Feature starts are aligned first, those that more inliers of other candidates' feature
+  /// starts agree with (within this fraction of the scene depth and these degrees) first of all:
+  /// one render's pose alone can be a repeated texture's.
+  double feature_agree_fraction = 0.05;
+  double feature_agree_deg = 3.0;
 };
 
 /// Everything the Localizer can be tuned with. Plain data; checked by Localizer::create.
@@ -321,6 +332,9 @@ struct LocalizationResult {
   /// Database keyframes aligned by a relocalization search on this frame (0: none ran), the
   /// radius of its region (metres; infinite: the whole database) and its time (ms, in total_ms).
   int relocalization_candidates = 0;
+  /// Candidates whose render gave a start from matched point features (RelocalizationOptions::
+  /// feature_starts).
+  int relocalization_feature_starts = 0;
   /// Database index of the keyframe the search ranked first (nearest descriptor, re-ranked by
   /// the phase correlation when RelocalizationOptions::rerank_candidates is on; -1: no search
   /// ran or none lay in the region): the retrieval's answer, before any alignment.
