@@ -68,6 +68,7 @@ TEST(CameraFront, UndistortedPinholeKeepsTheIntrinsicsAndAnIdealLensIsTheIdentit
   auto front = CameraFront::create(radtanLens(), ViewOptions{});
   ASSERT_TRUE(front.ok()) << front.error().message;
   EXPECT_FALSE((*front)->identity());
+  EXPECT_TRUE((*front)->needsRemap());
   EXPECT_EQ((*front)->view().fx, radtanLens().intrinsics.fx);
   EXPECT_EQ((*front)->view().width, 320);
   EXPECT_TRUE((*front)->viewRotation(Eigen::Matrix3d::Identity()).isIdentity());
@@ -76,6 +77,7 @@ TEST(CameraFront, UndistortedPinholeKeepsTheIntrinsicsAndAnIdealLensIsTheIdentit
   auto same = CameraFront::create(ideal, ViewOptions{});
   ASSERT_TRUE(same.ok());
   EXPECT_TRUE((*same)->identity());
+  EXPECT_FALSE((*same)->needsRemap());
   const ImageU8 img = randomImage(320, 240, 3);
   ImageU8 out;
   ASSERT_TRUE((*same)->remap(img, Eigen::Matrix3d::Identity(), out).ok());
@@ -248,7 +250,8 @@ TEST(CameraFront, AFlatFieldEvensOutAFalloffAndLeavesAnEvenImage) {
   o.flat_field_sigma_px = 40;
   auto front = CameraFront::create(lens, o);
   ASSERT_TRUE(front.ok()) << front.error().message;
-  EXPECT_FALSE((*front)->identity());  // the flat field runs on an ideal lens's image too
+  EXPECT_FALSE((*front)->identity());    // the flat field runs on an ideal lens's image too
+  EXPECT_FALSE((*front)->needsRemap());  // but nothing is resampled: no device remapper
   ImageU8 flat, flat_even;
   ASSERT_TRUE((*front)->remap(falloff, Eigen::Matrix3d::Identity(), flat).ok());
   ASSERT_TRUE((*front)->remap(even, Eigen::Matrix3d::Identity(), flat_even).ok());

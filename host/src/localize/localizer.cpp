@@ -1245,7 +1245,7 @@ std::string Localizer::backendSummary() const {
   return fmt::format("render on {}; live edges + alignment on {} ({}); re-render {}, {}{}",
                      m.keyframes->rendererDescription(), where, m.backend_reason, policy,
                      m.worker() ? "keyframes on a worker thread" : "keyframes made synchronously",
-                     m.front && !m.front->identity() ? "; lens image remapped by " + m.front->remapDescription() : "");
+                     m.front && m.front->needsRemap() ? "; lens image remapped by " + m.front->remapDescription() : "");
 }
 
 Status Localizer::setCameraFront(std::unique_ptr<CameraFront> front) {
@@ -1268,7 +1268,7 @@ Status Localizer::setCameraFront(std::unique_ptr<CameraFront> front) {
   }
   if (m.view_prior) m.view_prior->setView(Pose::Identity());
   // The remap runs where the live stages do: on a GPU (its remap stage) when they run there.
-  if (front && !front->identity() && m.accelerator && m.active == m.device_backend.get() &&
+  if (front && front->needsRemap() && m.accelerator && m.active == m.device_backend.get() &&
       !m.accelerator->isCpuDriver()) {
     Result<std::unique_ptr<ImageRemapper>> remapper =
         m.accelerator->createRemapper(front->table(Eigen::Matrix3d::Identity()), front->options().interpolation);

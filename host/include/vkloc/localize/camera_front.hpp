@@ -70,6 +70,9 @@ class CameraFront {
   /// True when the view needs no remap at all (an ideal pinhole lens, kUndistorted, own size,
   /// no flat field).
   bool identity() const { return same_pixels_ && options_.flat_field_sigma_px == 0; }
+  /// True when the view's pixels are resampled from the lens image (false: they are its own,
+  /// perhaps flat-fielded): a device remapper is worth making only then.
+  bool needsRemap() const { return !same_pixels_; }
 
   /// R_camera_view for a camera at attitude R_world_camera: identity for kUndistorted.
   Eigen::Matrix3d viewRotation(const Eigen::Matrix3d& R_world_camera) const;
