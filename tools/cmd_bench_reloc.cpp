@@ -43,6 +43,7 @@ struct RelocBenchArgs {
   int rerank = RelocalizationOptions{}.rerank_candidates;
   bool top_first = RelocalizationOptions{}.top_candidate_first;
   bool feature_starts = RelocalizationOptions{}.feature_starts;
+  bool inside_box = RelocalizationOptions{}.inside_database_box;
   bool confirm_start = RelocalizationOptions{}.confirm_start;
   std::string keyframes = "sync";
   int trials = 0;              ///< Forced-loss or start trials (0: none).
@@ -85,6 +86,7 @@ std::unique_ptr<Localizer> makeLocalizer(const Setup& s, const RelocBenchArgs& a
   options.relocalization.rerank_candidates = a.rerank;
   options.relocalization.top_candidate_first = a.top_first;
   options.relocalization.feature_starts = a.feature_starts;
+  options.relocalization.inside_database_box = a.inside_box;
   options.relocalization.confirm_start = a.confirm_start;
   auto localizer = take(Localizer::create(s.model, s.camera, options, s.accelerator));
   check(localizer->setKeyframeDatabase(s.db));
@@ -441,6 +443,11 @@ void addRelocBench(CLI::App& bench) {
       ->add_option("--feature-starts", args->feature_starts,
                    "Also start the alignment from ORB point features matched with each candidate's render (a RANSAC "
                    "PnP on its depth; true | false)")
+      ->capture_default_str();
+  reloc
+      ->add_option("--inside-box", args->inside_box,
+                   "Take a found pose only inside the box of the database's positions grown by the grid's reach (true "
+                   "| false)")
       ->capture_default_str();
   reloc->add_option("--refined", args->refined, "Probed starts aligned fully per search")
       ->check(CLI::Range(1, 100))

@@ -162,5 +162,49 @@ TEST(FeaturePose, RelocalizationFromKeyframesOutsideTheAlignmentsBasin) {
   }
 }
 
+TEST(Relocalization, APoseOutsideTheBoxOfTheDatabasesPositionsIsNotTaken) {
+  // Two keyframes 0.1 m apart, 0.5 m ahead of the query: the box of their positions grown by the
+  // grid's reach (0.09 m) does not hold the query's position. The search finds it all the same
+  // and takes it only when the box is not asked for.
+  const Model room = makeDemoRoom();
+  const PinholeCamera camera = testCamera();
+  const Pose T_world_live = demoViewpoints("room").front();
+  auto live = renderReference(room, camera, T_world_live);
+  ASSERT_TRUE(live.ok());
+  auto database = std::make_shared<KeyframeDatabase>(modelFingerprint(room), camera);
+  for (double side : {0.05, -0.05}) {
+    DatabaseKeyframe keyframe;
+    keyframe.T_world_camera = displaced(T_world_live, T_world_live.linear() * Eigen::Vector3d(side, 0.0, 0.5), 0.0);
+    auto view = renderReference(room, camera, keyframe.T_world_camera);
+    ASSERT_TRUE(view.ok());
+    auto descriptor = globalDescriptor(view->gray);
+    ASSERT_TRUE(descriptor.ok());
+    keyframe.descriptor = *descriptor;
+    keyframe.scene_depth_m = 2.0f;
+    database->add(keyframe);
+  }
+  const auto [lo, hi] = database->positionBounds();
+  EXPECT_NEAR((hi - lo).norm(), 0.1, 1e-9);
+  EXPECT_NEAR(database->positionReach(), 0.1 * std::sqrt(3.0) / 2.0, 1e-9);
+  for (bool inside : {false, true}) {
+    LocalizerOptions options;
+    options.keyframe_threading = KeyframeThreading::kSynchronous;
+    options.backend = LocalizerBackend::kCpu;
+    options.relocalization.inside_database_box = inside;
+    auto localizer = Localizer::create(room, camera, options, nullptr);
+    ASSERT_TRUE(localizer.ok()) << localizer.error().message;
+    ASSERT_TRUE((*localizer)->setKeyframeDatabase(database).ok());
+    ASSERT_TRUE((*localizer)->startSearch(SearchRegion{T_world_live.translation(), 1.0}).ok());
+    const Result<LocalizationResult> r = (*localizer)->localize(1, live->gray);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    if (inside) {
+      EXPECT_EQ(r->state, TrackingState::kInitializing);
+    } else {
+      ASSERT_EQ(r->state, TrackingState::kRelocalized);
+      EXPECT_LT((r->T_world_camera.translation() - T_world_live.translation()).norm(), 0.01);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace vkloc

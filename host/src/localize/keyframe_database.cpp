@@ -165,6 +165,17 @@ std::vector<KeyframeCandidate> KeyframeDatabase::query(const GlobalDescriptor& d
   return out;
 }
 
+std::pair<Eigen::Vector3d, Eigen::Vector3d> KeyframeDatabase::positionBounds() const {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  for (size_t i = 0; i + 2 < positions_.size(); i += 3) {
+    const Eigen::Vector3d p(positions_[i], positions_[i + 1], positions_[i + 2]);
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return {lo, hi};
+}
+
 double KeyframeDatabase::positionReach() const {
   // Distinct positions (a position's views share it exactly).
   std::vector<Eigen::Vector3d> positions;

@@ -256,6 +256,8 @@ struct Localizer::Impl {
   // Relocalization and global initialization (RelocalizationOptions).
   std::shared_ptr<const KeyframeDatabase> database;
   double database_reach_m = 0;  ///< KeyframeDatabase::positionReach: a search region grows by it.
+  /// KeyframeDatabase::positionBounds grown by database_reach_m (RelocalizationOptions::inside_database_box).
+  Eigen::Vector3d database_min = Eigen::Vector3d::Zero(), database_max = Eigen::Vector3d::Zero();
   uint64_t model_fingerprint = 0;
   bool searching = false;                     ///< Global initialization in progress (startSearch).
   std::optional<SearchRegion> search_region;  ///< Its region (nullopt: the whole database).
@@ -862,7 +864,10 @@ struct Localizer::Impl {
       }
       const double score =
           verificationScore(verificationFeatures(track, keyframes->current()->scene_depth_m), options.verification);
-      if (track.state == TrackingState::kTracking && score >= options.verification.min_score) {
+      const Eigen::Vector3d& position = track.T_world_camera.translation();
+      const bool inside = !o.inside_database_box || ((position.array() >= database_min.array()).all() &&
+                                                     (position.array() <= database_max.array()).all());
+      if (track.state == TrackingState::kTracking && score >= options.verification.min_score && inside) {
         refined.push_back(Refined{std::move(track), score, keyframes->current(), p.candidate});
       }
       return Status::success();
@@ -1203,6 +1208,11 @@ Status Localizer::setKeyframeDatabase(std::shared_ptr<const KeyframeDatabase> da
   }
   m.database = std::move(database);
   m.database_reach_m = m.database ? m.database->positionReach() : 0.0;
+  if (m.database) {
+    const auto [lo, hi] = m.database->positionBounds();
+    m.database_min = lo.array() - m.database_reach_m;
+    m.database_max = hi.array() + m.database_reach_m;
+  }
   if (!m.database) m.searching = m.confirming = false;
   return Status::success();
 }

@@ -21,6 +21,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "vkloc/core/camera.hpp"
@@ -106,6 +107,10 @@ class KeyframeDatabase {
   /// other one (estimated on up to 256 positions; 0 with fewer than two positions). A search
   /// region grown by it holds the keyframes nearest a camera at its border.
   double positionReach() const;
+  /// The box of the keyframes' positions (world, metres): min and max corners; min > max (both
+  /// infinite) for an empty database. Built over a navigable volume, it bounds where a camera
+  /// can be (RelocalizationOptions::inside_database_box).
+  std::pair<Eigen::Vector3d, Eigen::Vector3d> positionBounds() const;
 
   /// Writes the file format above atomically. I/O errors as kIoError naming the path.
   Status save(const std::string& path) const;
