@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
@@ -36,20 +37,20 @@ float keypointDepth(const ImageF32& depth, float x_px, float y_px) {
       hi = std::max(hi, d);
     }
   }
-  if (!(lo > 0.0f) || hi - lo > 0.03f * depth.at(x, y)) return 0.0f;
+  if (!(lo > 0.0f) || !std::isfinite(hi) || hi - lo > 0.03f * depth.at(x, y)) return 0.0f;
   return depth.at(x, y);
 }
 
 }  // namespace
 
 Status validateFeaturePoseOptions(const FeaturePoseOptions& o) {
-  if (o.max_features < 50 || o.max_features > 20000 || !finiteIn(o.ratio, 0.0, 1.0) || o.max_distance_bits < 0 ||
+  if (o.max_features < 50 || o.max_features > 20000 || !finiteIn(o.ratio, 0.01, 1.0) || o.max_distance_bits < 0 ||
       o.max_distance_bits > 256 || !finiteIn(o.reprojection_px, 0.1, 100.0) || o.iterations < 1 ||
       o.iterations > 100000 || o.min_inliers < 4 || !finiteIn(o.min_inlier_fraction, 0.0, 1.0)) {
     return makeError(ErrorCode::kInvalidArgument,
-                     "feature pose: need max_features in 50..20000, ratio in 0..1, max_distance_bits in 0..256, "
-                     "reprojection_px in 0.1..100, iterations in 1..100000, min_inliers >= 4 and "
-                     "min_inlier_fraction in 0..1");
+                     "relocalization.features: need max_features in 50..20000, ratio in 0.01..1, "
+                     "max_distance_bits in 0..256, reprojection_px in 0.1..100, iterations in 1..100000, "
+                     "min_inliers >= 4 and min_inlier_fraction in 0..1");
   }
   return Status::success();
 }
@@ -62,18 +63,26 @@ Result<PointFeatures> detectPointFeatures(const ImageU8& gray, int max_features)
                                  gray.height, gray.channels));
   }
   const cv::Mat in(gray.height, gray.width, CV_8UC1, const_cast<uint8_t*>(gray.data.data()));
-  cv::Ptr<cv::ORB> orb = cv::ORB::create(std::max(1, max_features));
+  constexpr float kScaleFactor = 1.2f;
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
-  orb->detectAndCompute(in, cv::noArray(), keypoints, descriptors);
+  try {
+    cv::Ptr<cv::ORB> orb = cv::ORB::create(std::max(1, max_features), kScaleFactor);
+    orb->detectAndCompute(in, cv::noArray(), keypoints, descriptors);
+  } catch (const cv::Exception& e) {
+    return makeError(ErrorCode::kInvalidArgument, fmt::format("feature pose: ORB failed: {}", e.what()));
+  }
   PointFeatures out;
   if (keypoints.empty() || descriptors.cols != kDescriptorBytes || descriptors.type() != CV_8U) return out;
   out.x_px.reserve(keypoints.size());
   out.y_px.reserve(keypoints.size());
   out.descriptors.resize(keypoints.size() * kDescriptorBytes);
   for (size_t i = 0; i < keypoints.size(); ++i) {
-    out.x_px.push_back(keypoints[i].pt.x);
-    out.y_px.push_back(keypoints[i].pt.y);
+    // OpenCV scales a level-l position by s = 1.2^l about the image's corner; about pixel
+    // centres (core/camera.hpp) the position is (p_l + 0.5) s - 0.5 = p + (s - 1) / 2.
+    const float half_growth = 0.5f * (std::pow(kScaleFactor, static_cast<float>(keypoints[i].octave)) - 1.0f);
+    out.x_px.push_back(keypoints[i].pt.x + half_growth);
+    out.y_px.push_back(keypoints[i].pt.y + half_growth);
     std::memcpy(out.descriptors.data() + i * kDescriptorBytes, descriptors.ptr<uint8_t>(static_cast<int>(i)),
                 kDescriptorBytes);
   }
@@ -90,11 +99,23 @@ Result<std::optional<FeaturePose>> featurePose(const PointFeatures& live, const 
         fmt::format("feature pose: the render's depth is {}x{} with {} channel(s), the camera {}x{}",
                     render_depth.width, render_depth.height, render_depth.channels, camera.width, camera.height));
   }
+  for (const PointFeatures* f : {&live, &render}) {
+    if (f->y_px.size() != f->x_px.size() || f->descriptors.size() != f->size() * kDescriptorBytes) {
+      return makeError(ErrorCode::kInvalidArgument,
+                       "feature pose: point features need a y and 32 descriptor bytes per x");
+    }
+  }
+  if (!(camera.fx > 0) || !(camera.fy > 0)) {
+    return makeError(ErrorCode::kInvalidArgument, "feature pose: the camera's focal lengths must be positive");
+  }
   if (live.size() < 4 || render.size() < 4) return std::optional<FeaturePose>{};
   // Nearest render feature of each live one, kept when clearly better than the second nearest.
-  cv::BFMatcher matcher(cv::NORM_HAMMING);
   std::vector<std::vector<cv::DMatch>> knn;
-  matcher.knnMatch(descriptorMat(live), descriptorMat(render), knn, 2);
+  try {
+    cv::BFMatcher(cv::NORM_HAMMING).knnMatch(descriptorMat(live), descriptorMat(render), knn, 2);
+  } catch (const cv::Exception&) {
+    return std::optional<FeaturePose>{};  // nothing matched
+  }
   std::vector<cv::Point3d> points_world;
   std::vector<cv::Point2d> pixels_live;
   std::vector<char> used(render.size(), 0);  // one live feature per render feature
@@ -118,27 +139,30 @@ Result<std::optional<FeaturePose>> featurePose(const PointFeatures& live, const 
   out.matches = static_cast<int>(points_world.size());
   if (out.matches < std::max(options.min_inliers, 6)) return std::optional<FeaturePose>{};
   const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-  cv::Mat rvec, tvec;
-  std::vector<int> inliers;
-  // The solver's random samples come from OpenCV's fixed-seed generator: deterministic.
-  const bool solved =
-      cv::solvePnPRansac(points_world, pixels_live, K, cv::noArray(), rvec, tvec, false, options.iterations,
-                         static_cast<float>(options.reprojection_px), 0.999, inliers, cv::SOLVEPNP_EPNP);
-  out.inliers = static_cast<int>(inliers.size());
-  if (!solved || out.inliers < options.min_inliers ||
-      out.inliers < options.min_inlier_fraction * static_cast<double>(out.matches)) {
-    return std::optional<FeaturePose>{};
+  cv::Mat rvec, tvec, R_cv;
+  try {
+    std::vector<int> inliers;
+    // The solver's random samples come from OpenCV's fixed-seed generator: deterministic.
+    const bool solved =
+        cv::solvePnPRansac(points_world, pixels_live, K, cv::noArray(), rvec, tvec, false, options.iterations,
+                           static_cast<float>(options.reprojection_px), 0.999, inliers, cv::SOLVEPNP_EPNP);
+    out.inliers = static_cast<int>(inliers.size());
+    if (!solved || out.inliers < options.min_inliers ||
+        out.inliers < options.min_inlier_fraction * static_cast<double>(out.matches)) {
+      return std::optional<FeaturePose>{};
+    }
+    // Levenberg-Marquardt on the inliers from the RANSAC pose.
+    std::vector<cv::Point3d> in_world;
+    std::vector<cv::Point2d> in_live;
+    for (int i : inliers) {
+      in_world.push_back(points_world[static_cast<size_t>(i)]);
+      in_live.push_back(pixels_live[static_cast<size_t>(i)]);
+    }
+    cv::solvePnPRefineLM(in_world, in_live, K, cv::noArray(), rvec, tvec);
+    cv::Rodrigues(rvec, R_cv);
+  } catch (const cv::Exception&) {
+    return std::optional<FeaturePose>{};  // a degenerate set of points: no pose
   }
-  // Levenberg-Marquardt on the inliers from the RANSAC pose.
-  std::vector<cv::Point3d> in_world;
-  std::vector<cv::Point2d> in_live;
-  for (int i : inliers) {
-    in_world.push_back(points_world[static_cast<size_t>(i)]);
-    in_live.push_back(pixels_live[static_cast<size_t>(i)]);
-  }
-  cv::solvePnPRefineLM(in_world, in_live, K, cv::noArray(), rvec, tvec);
-  cv::Mat R_cv;
-  cv::Rodrigues(rvec, R_cv);
   Eigen::Matrix3d R_camera_world;
   Eigen::Vector3d t_camera_world;
   cv::cv2eigen(R_cv, R_camera_world);

@@ -43,7 +43,8 @@ Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeReques
   keyframe->scene_depth_m = medianDepth(view->depth);
   if (request.keep_gray) keyframe->gray = view->gray;
   if (request.keep_depth) keyframe->depth = view->depth;
-  // The render's depth and normals are handed to the reference stage (no 5 MB copy).
+  // The render's depth and normals are handed to the reference stage (no 5 MB copy unless
+  // keep_depth asked for the depth).
   Result<EdgeReference> reference = buildEdgeReference(std::move(*view), camera_, request.T_world_ref, reference_);
   if (!reference.ok()) return reference.error();
   const EdgeKindMask& drop = request.dropped_kinds;

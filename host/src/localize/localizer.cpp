@@ -781,37 +781,39 @@ struct Localizer::Impl {
       if (it != probes.end()) std::rotate(probes.begin(), it, std::next(it));
     }
     if (o.feature_starts) {
-      // Probes from feature poses go first, by their support: the RANSAC inliers of every feature
-      // start that agrees with theirs (from any candidate's render, within feature_agree_fraction
-      // of the scene depth and feature_agree_deg). One render's pose alone can be wrong with
-      // many inliers: a texture the model repeats (books on shelves, a poster twice) matches as
-      // well at the wrong copy, and the poses of several renders then outvote it.
-      std::vector<std::pair<int, size_t>> supported;  // (inliers of the agreeing starts, probe)
+      // Feature starts that another candidate's agrees with go first, by their support: the
+      // RANSAC inliers of every feature start that agrees with theirs (within
+      // feature_agree_fraction of the scene depth and feature_agree_deg); then the best lone one;
+      // the other lone ones last. One render's pose alone can be wrong with many inliers: a
+      // texture the model repeats (books on shelves, a poster twice) matches as well at the
+      // wrong copy, and the poses of several renders then outvote it.
+      std::vector<std::pair<int, size_t>> agreed, lone;  // (support, probe)
       for (size_t i = 0; i < probes.size(); ++i) {
         const Probe& a = probes[i];
         if (a.feature_inliers == 0) continue;
         const double depth_m = a.keyframe->scene_depth_m;
-        int support = 0;
-        for (const Probe& b : probes) {
+        int support = 0, others = 0;
+        for (size_t j = 0; j < probes.size(); ++j) {
+          const Probe& b = probes[j];
           if (b.feature_inliers == 0) continue;
           if ((a.start.translation() - b.start.translation()).norm() <= o.feature_agree_fraction * depth_m &&
               rotationAngleDeg(a.start.linear().transpose() * b.start.linear()) <= o.feature_agree_deg) {
             support += b.feature_inliers;
+            others += j != i;
           }
         }
-        supported.emplace_back(support, i);
+        (others > 0 ? agreed : lone).emplace_back(support, i);
       }
-      std::stable_sort(supported.begin(), supported.end(),
-                       [](const auto& a, const auto& b) { return a.first > b.first; });
+      const auto by_support = [](const auto& a, const auto& b) { return a.first > b.first; };
+      std::stable_sort(agreed.begin(), agreed.end(), by_support);
+      std::stable_sort(lone.begin(), lone.end(), by_support);
       std::vector<Probe> ordered;
-      std::vector<char> moved(probes.size(), 0);
-      for (const auto& [support, i] : supported) {
-        ordered.push_back(probes[i]);
-        moved[i] = 1;
-      }
+      for (const auto& [support, i] : agreed) ordered.push_back(probes[i]);
+      if (!lone.empty()) ordered.push_back(probes[lone.front().second]);
       for (size_t i = 0; i < probes.size(); ++i) {
-        if (!moved[i]) ordered.push_back(std::move(probes[i]));
+        if (probes[i].feature_inliers == 0) ordered.push_back(probes[i]);
       }
+      for (size_t k = 1; k < lone.size(); ++k) ordered.push_back(probes[lone[k].second]);
       probes = std::move(ordered);
     }
     // A refined pose verified at tracking's score; taken alone at min_score, or when alignments
@@ -1208,10 +1210,13 @@ Status Localizer::setKeyframeDatabase(std::shared_ptr<const KeyframeDatabase> da
   }
   m.database = std::move(database);
   m.database_reach_m = m.database ? m.database->positionReach() : 0.0;
-  if (m.database) {
+  if (m.database && m.database_reach_m > 0) {
     const auto [lo, hi] = m.database->positionBounds();
     m.database_min = lo.array() - m.database_reach_m;
     m.database_max = hi.array() + m.database_reach_m;
+  } else {  // a single position (or none) bounds nothing
+    m.database_min = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+    m.database_max = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   }
   if (!m.database) m.searching = m.confirming = false;
   return Status::success();

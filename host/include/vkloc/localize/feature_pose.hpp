@@ -34,7 +34,7 @@ struct FeaturePoseOptions {
   double min_inlier_fraction = 0.15;
 };
 
-/// kInvalidArgument naming the field for values out of range.
+/// kInvalidArgument listing the fields' ranges for values out of range.
 Status validateFeaturePoseOptions(const FeaturePoseOptions& options);
 
 /// ORB keypoints (pixel positions) and their 256-bit descriptors, 32 bytes each, row by row.
@@ -58,7 +58,9 @@ struct FeaturePose {
 /// The live camera's pose from `live` features matched with those of a render made at
 /// T_world_render with `camera` (the same intrinsics as the live image) whose depth (camera z,
 /// metres, 0 = nothing) is `render_depth`. nullopt when too few matches or inliers agree
-/// (options). kInvalidArgument when the depth image is not camera-sized.
+/// (options) or OpenCV finds the points degenerate. kInvalidArgument when the depth image is not
+/// camera-sized, the features are inconsistent (a y and 32 descriptor bytes per x) or the
+/// camera's focal lengths are not positive.
 Result<std::optional<FeaturePose>> featurePose(const PointFeatures& live, const PointFeatures& render,
                                                const ImageF32& render_depth, const PinholeCamera& camera,
                                                const Pose& T_world_render, const FeaturePoseOptions& options);

@@ -122,8 +122,9 @@ struct RelocalizationOptions {
   /// Starts (of all candidates) aligned fully after the probes on the deepest level, most
   /// inliers above chance first (1..100).
   int refined_probes = 4;
-  /// The first of them is the best probe of the best-ranked candidate (the re-ranking's first,
-  /// else the nearest descriptor's), whatever its inliers.
+  /// The first of them (after the feature starts, see feature_starts) is the best probe of the
+  /// best-ranked candidate (the re-ranking's first, else the nearest descriptor's), whatever its
+  /// inliers.
   bool top_candidate_first = true;
   /// Each start is also probed this many steps of depth_step x the candidate's scene depth
   /// forwards and backwards along its optical axis (a shift of the image cannot show that).
@@ -140,15 +141,18 @@ struct RelocalizationOptions {
   /// start from many points' geometry, where the candidate's pose is outside the alignment's basin.
   bool feature_starts = true;
   FeaturePoseOptions features;
-  /// Feature starts are aligned first, those that more inliers of other candidates' feature
-  /// starts agree with (within this fraction of the scene depth and these degrees) first of all:
-  /// one render's pose alone can be a repeated texture's.
+  /// Feature starts that another candidate's feature start agrees with (within this fraction of
+  /// the scene depth and these degrees) are aligned first, by the RANSAC inliers of all that
+  /// agree with them, then the best one no other agrees with; the other lone ones go last (one
+  /// render's pose alone can be a repeated texture's, and must not crowd out the edge starts).
   double feature_agree_fraction = 0.05;
   double feature_agree_deg = 3.0;
   /// A pose a search finds is taken only inside the box of the database's keyframe positions
   /// grown by the grid's reach (KeyframeDatabase::positionBounds, positionReach): the navigable
   /// space the database was built for. A look-alike place can verify well from the floor or
-  /// from inside a wall (the room: 2.9 m and 63 deg off at floor level, score 0.92).
+  /// from inside a wall (the room: 2.9 m and 63 deg off at floor level, score 0.92). A database
+  /// built at one height bounds the height to +- the reach; one with a single position (reach 0)
+  /// bounds nothing.
   bool inside_database_box = true;
 };
 
@@ -350,7 +354,7 @@ struct LocalizationResult {
   double render_ms = 0;      ///< Rendering keyframes on this call, ms (0 when none was made here).
   double reference_ms = 0;   ///< Extracting their edge points, ms.
   double live_ms = 0;        ///< Live pyramid, edges and distance fields, ms.
-  double align_ms = 0;       ///< Gauss-Newton alignment, ms.
+  double align_ms = 0;       ///< Gauss-Newton alignment (and a search's feature poses), ms.
   double total_ms = 0;       ///< Whole localize() call, ms.
   /// With a camera front: the view the frame was tracked in (T_world_camera is the camera's,
   /// T_world_camera * T_camera_view the view's) and the remap's time (ms, in total_ms).
