@@ -119,6 +119,42 @@ TEST(FeaturePose, BadInputIsRefused) {
   EXPECT_TRUE(validateFeaturePoseOptions(FeaturePoseOptions{}).ok());
 }
 
+/// A database of keyframes at `poses` in the demo room, each with its render's descriptor.
+std::shared_ptr<KeyframeDatabase> roomDatabase(const Model& room, const PinholeCamera& camera,
+                                               const std::vector<Pose>& poses) {
+  auto database = std::make_shared<KeyframeDatabase>(modelFingerprint(room), camera);
+  for (const Pose& T_world_camera : poses) {
+    auto view = renderReference(room, camera, T_world_camera);
+    EXPECT_TRUE(view.ok());
+    if (!view.ok()) continue;
+    auto descriptor = globalDescriptor(view->gray);
+    EXPECT_TRUE(descriptor.ok());
+    if (!descriptor.ok()) continue;
+    DatabaseKeyframe keyframe;
+    keyframe.T_world_camera = T_world_camera;
+    keyframe.descriptor = *descriptor;
+    keyframe.scene_depth_m = 2.0f;
+    database->add(keyframe);
+  }
+  return database;
+}
+
+/// One search of `live` within 1 m of `T_world_live` on a new synchronous CPU Localizer.
+Result<LocalizationResult> searchOnce(const Model& room, const PinholeCamera& camera,
+                                      const std::shared_ptr<KeyframeDatabase>& database,
+                                      const RelocalizationOptions& relocalization, const ImageU8& live,
+                                      const Pose& T_world_live) {
+  LocalizerOptions options;
+  options.keyframe_threading = KeyframeThreading::kSynchronous;
+  options.backend = LocalizerBackend::kCpu;
+  options.relocalization = relocalization;
+  auto localizer = Localizer::create(room, camera, options, nullptr);
+  if (!localizer.ok()) return localizer.error();
+  VKLOC_TRY_STATUS((*localizer)->setKeyframeDatabase(database));
+  VKLOC_TRY_STATUS((*localizer)->startSearch(SearchRegion{T_world_live.translation(), 1.0}));
+  return (*localizer)->localize(1, live);
+}
+
 TEST(FeaturePose, RelocalizationFromKeyframesOutsideTheAlignmentsBasin) {
   // A database of two keyframes, each 0.6 m and 25 deg from the query (on either side): the
   // edge alignment from their poses does not reach the true one (measured: not found without
@@ -128,35 +164,22 @@ TEST(FeaturePose, RelocalizationFromKeyframesOutsideTheAlignmentsBasin) {
   const Pose T_world_live = demoViewpoints("room").front();
   auto live = renderReference(room, camera, T_world_live);
   ASSERT_TRUE(live.ok());
-  auto database = std::make_shared<KeyframeDatabase>(modelFingerprint(room), camera);
+  std::vector<Pose> poses;
   for (double side : {1.0, -1.0}) {
-    DatabaseKeyframe keyframe;
-    keyframe.T_world_camera =
-        displaced(T_world_live, T_world_live.linear() * Eigen::Vector3d(0.45 * side, 0.0, 0.4), 25.0 * side);
-    auto view = renderReference(room, camera, keyframe.T_world_camera);
-    ASSERT_TRUE(view.ok());
-    auto descriptor = globalDescriptor(view->gray);
-    ASSERT_TRUE(descriptor.ok());
-    keyframe.descriptor = *descriptor;
-    keyframe.scene_depth_m = 2.0f;
-    database->add(keyframe);
+    poses.push_back(
+        displaced(T_world_live, T_world_live.linear() * Eigen::Vector3d(0.45 * side, 0.0, 0.4), 25.0 * side));
   }
+  const auto database = roomDatabase(room, camera, poses);
+  ASSERT_EQ(database->size(), 2u);
   for (bool features : {false, true}) {
-    LocalizerOptions options;
-    options.keyframe_threading = KeyframeThreading::kSynchronous;
-    options.backend = LocalizerBackend::kCpu;
-    options.relocalization.feature_starts = features;
-    auto localizer = Localizer::create(room, camera, options, nullptr);
-    ASSERT_TRUE(localizer.ok()) << localizer.error().message;
-    ASSERT_TRUE((*localizer)->setKeyframeDatabase(database).ok());
-    ASSERT_TRUE((*localizer)->startSearch(SearchRegion{T_world_live.translation(), 1.0}).ok());
-    const Result<LocalizationResult> r = (*localizer)->localize(1, live->gray);
+    RelocalizationOptions relocalization;
+    relocalization.feature_starts = features;
+    const Result<LocalizationResult> r = searchOnce(room, camera, database, relocalization, live->gray, T_world_live);
     ASSERT_TRUE(r.ok()) << r.error().message;
-    const double error_m = (r->T_world_camera.translation() - T_world_live.translation()).norm();
     if (features) {
       EXPECT_EQ(r->relocalization_feature_starts, 2);
       ASSERT_EQ(r->state, TrackingState::kRelocalized);
-      EXPECT_LT(error_m, 0.01);
+      EXPECT_LT((r->T_world_camera.translation() - T_world_live.translation()).norm(), 0.01);
       EXPECT_LT(rotationAngleDeg(r->T_world_camera.linear().transpose() * T_world_live.linear()), 0.3);
     } else {
       EXPECT_EQ(r->relocalization_feature_starts, 0);
@@ -173,48 +196,26 @@ TEST(Relocalization, APoseOutsideTheBoxOfTheDatabasesPositionsIsNotTaken) {
   const Pose T_world_live = demoViewpoints("room").front();
   auto live = renderReference(room, camera, T_world_live);
   ASSERT_TRUE(live.ok());
-  auto database = std::make_shared<KeyframeDatabase>(modelFingerprint(room), camera);
+  std::vector<Pose> poses;
   for (double side : {0.05, -0.05}) {
-    DatabaseKeyframe keyframe;
-    keyframe.T_world_camera = displaced(T_world_live, T_world_live.linear() * Eigen::Vector3d(side, 0.0, 0.5), 0.0);
-    auto view = renderReference(room, camera, keyframe.T_world_camera);
-    ASSERT_TRUE(view.ok());
-    auto descriptor = globalDescriptor(view->gray);
-    ASSERT_TRUE(descriptor.ok());
-    keyframe.descriptor = *descriptor;
-    keyframe.scene_depth_m = 2.0f;
-    database->add(keyframe);
+    poses.push_back(displaced(T_world_live, T_world_live.linear() * Eigen::Vector3d(side, 0.0, 0.5), 0.0));
   }
+  const auto database = roomDatabase(room, camera, poses);
+  ASSERT_EQ(database->size(), 2u);
   const auto [lo, hi] = database->positionBounds();
   EXPECT_NEAR((hi - lo).norm(), 0.1, 1e-9);
   EXPECT_NEAR(database->positionReach(), 0.1 * std::sqrt(3.0) / 2.0, 1e-9);
   // One position has no reach and bounds nothing: its search takes the pose.
-  auto single = std::make_shared<KeyframeDatabase>(modelFingerprint(room), camera);
-  single->add(database->keyframes().front());
+  const auto single = roomDatabase(room, camera, {poses.front()});
   EXPECT_EQ(single->positionReach(), 0.0);
-  {
-    LocalizerOptions options;
-    options.keyframe_threading = KeyframeThreading::kSynchronous;
-    options.backend = LocalizerBackend::kCpu;
-    auto localizer = Localizer::create(room, camera, options, nullptr);
-    ASSERT_TRUE(localizer.ok()) << localizer.error().message;
-    ASSERT_TRUE((*localizer)->setKeyframeDatabase(single).ok());
-    ASSERT_TRUE((*localizer)->startSearch(SearchRegion{T_world_live.translation(), 1.0}).ok());
-    const Result<LocalizationResult> r = (*localizer)->localize(1, live->gray);
-    ASSERT_TRUE(r.ok()) << r.error().message;
-    ASSERT_EQ(r->state, TrackingState::kRelocalized);
-    EXPECT_LT((r->T_world_camera.translation() - T_world_live.translation()).norm(), 0.01);
-  }
+  const Result<LocalizationResult> one = searchOnce(room, camera, single, {}, live->gray, T_world_live);
+  ASSERT_TRUE(one.ok()) << one.error().message;
+  ASSERT_EQ(one->state, TrackingState::kRelocalized);
+  EXPECT_LT((one->T_world_camera.translation() - T_world_live.translation()).norm(), 0.01);
   for (bool inside : {false, true}) {
-    LocalizerOptions options;
-    options.keyframe_threading = KeyframeThreading::kSynchronous;
-    options.backend = LocalizerBackend::kCpu;
-    options.relocalization.inside_database_box = inside;
-    auto localizer = Localizer::create(room, camera, options, nullptr);
-    ASSERT_TRUE(localizer.ok()) << localizer.error().message;
-    ASSERT_TRUE((*localizer)->setKeyframeDatabase(database).ok());
-    ASSERT_TRUE((*localizer)->startSearch(SearchRegion{T_world_live.translation(), 1.0}).ok());
-    const Result<LocalizationResult> r = (*localizer)->localize(1, live->gray);
+    RelocalizationOptions relocalization;
+    relocalization.inside_database_box = inside;
+    const Result<LocalizationResult> r = searchOnce(room, camera, database, relocalization, live->gray, T_world_live);
     ASSERT_TRUE(r.ok()) << r.error().message;
     if (inside) {
       EXPECT_EQ(r->state, TrackingState::kInitializing);
