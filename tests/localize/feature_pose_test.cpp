@@ -119,12 +119,27 @@ TEST(FeaturePose, BadInputIsRefused) {
   EXPECT_TRUE(validateFeaturePoseOptions(FeaturePoseOptions{}).ok());
 }
 
-/// A database of keyframes at `poses` in the demo room, each with its render's descriptor.
-std::shared_ptr<KeyframeDatabase> roomDatabase(const Model& room, const PinholeCamera& camera,
-                                               const std::vector<Pose>& poses) {
-  auto database = std::make_shared<KeyframeDatabase>(modelFingerprint(room), camera);
+/// The demo room, the test camera and the image of the query (a render at its first viewpoint).
+struct RoomQuery {
+  Model room = makeDemoRoom();
+  PinholeCamera camera = testCamera();
+  Pose T_world_live = demoViewpoints("room").front();
+  ImageU8 live;
+};
+
+RoomQuery roomQuery() {
+  RoomQuery q;
+  auto view = renderReference(q.room, q.camera, q.T_world_live);
+  EXPECT_TRUE(view.ok());
+  if (view.ok()) q.live = view->gray;
+  return q;
+}
+
+/// A database of keyframes at `poses` in the query's room, each with its render's descriptor.
+std::shared_ptr<KeyframeDatabase> roomDatabase(const RoomQuery& q, const std::vector<Pose>& poses) {
+  auto database = std::make_shared<KeyframeDatabase>(modelFingerprint(q.room), q.camera);
   for (const Pose& T_world_camera : poses) {
-    auto view = renderReference(room, camera, T_world_camera);
+    auto view = renderReference(q.room, q.camera, T_world_camera);
     EXPECT_TRUE(view.ok());
     if (!view.ok()) continue;
     auto descriptor = globalDescriptor(view->gray);
@@ -139,42 +154,38 @@ std::shared_ptr<KeyframeDatabase> roomDatabase(const Model& room, const PinholeC
   return database;
 }
 
-/// One search of `live` within 1 m of `T_world_live` on a new synchronous CPU Localizer.
-Result<LocalizationResult> searchOnce(const Model& room, const PinholeCamera& camera,
-                                      const std::shared_ptr<KeyframeDatabase>& database,
-                                      const RelocalizationOptions& relocalization, const ImageU8& live,
-                                      const Pose& T_world_live) {
+/// One search of the query's image within 1 m of its pose on a new synchronous CPU Localizer.
+Result<LocalizationResult> searchOnce(const RoomQuery& q, const std::shared_ptr<KeyframeDatabase>& database,
+                                      const RelocalizationOptions& relocalization) {
   LocalizerOptions options;
   options.keyframe_threading = KeyframeThreading::kSynchronous;
   options.backend = LocalizerBackend::kCpu;
   options.relocalization = relocalization;
-  auto localizer = Localizer::create(room, camera, options, nullptr);
+  auto localizer = Localizer::create(q.room, q.camera, options, nullptr);
   if (!localizer.ok()) return localizer.error();
   VKLOC_TRY_STATUS((*localizer)->setKeyframeDatabase(database));
-  VKLOC_TRY_STATUS((*localizer)->startSearch(SearchRegion{T_world_live.translation(), 1.0}));
-  return (*localizer)->localize(1, live);
+  VKLOC_TRY_STATUS((*localizer)->startSearch(SearchRegion{q.T_world_live.translation(), 1.0}));
+  return (*localizer)->localize(1, q.live);
 }
 
 TEST(FeaturePose, RelocalizationFromKeyframesOutsideTheAlignmentsBasin) {
   // A database of two keyframes, each 0.6 m and 25 deg from the query (on either side): the
   // edge alignment from their poses does not reach the true one (measured: not found without
   // feature starts); the feature start of one of them does (the other's is 0.3 m off).
-  const Model room = makeDemoRoom();
-  const PinholeCamera camera = testCamera();
-  const Pose T_world_live = demoViewpoints("room").front();
-  auto live = renderReference(room, camera, T_world_live);
-  ASSERT_TRUE(live.ok());
+  const RoomQuery q = roomQuery();
+  ASSERT_FALSE(q.live.empty());
+  const Pose& T_world_live = q.T_world_live;
   std::vector<Pose> poses;
   for (double side : {1.0, -1.0}) {
     poses.push_back(
         displaced(T_world_live, T_world_live.linear() * Eigen::Vector3d(0.45 * side, 0.0, 0.4), 25.0 * side));
   }
-  const auto database = roomDatabase(room, camera, poses);
+  const auto database = roomDatabase(q, poses);
   ASSERT_EQ(database->size(), 2u);
   for (bool features : {false, true}) {
     RelocalizationOptions relocalization;
     relocalization.feature_starts = features;
-    const Result<LocalizationResult> r = searchOnce(room, camera, database, relocalization, live->gray, T_world_live);
+    const Result<LocalizationResult> r = searchOnce(q, database, relocalization);
     ASSERT_TRUE(r.ok()) << r.error().message;
     if (features) {
       EXPECT_EQ(r->relocalization_feature_starts, 2);
@@ -191,31 +202,29 @@ TEST(Relocalization, APoseOutsideTheBoxOfTheDatabasesPositionsIsNotTaken) {
   // Two keyframes 0.1 m apart, 0.5 m ahead of the query: the box of their positions grown by the
   // grid's reach (0.09 m) does not hold the query's position. The search finds it all the same
   // and takes it only when the box is not asked for.
-  const Model room = makeDemoRoom();
-  const PinholeCamera camera = testCamera();
-  const Pose T_world_live = demoViewpoints("room").front();
-  auto live = renderReference(room, camera, T_world_live);
-  ASSERT_TRUE(live.ok());
+  const RoomQuery q = roomQuery();
+  ASSERT_FALSE(q.live.empty());
+  const Pose& T_world_live = q.T_world_live;
   std::vector<Pose> poses;
   for (double side : {0.05, -0.05}) {
     poses.push_back(displaced(T_world_live, T_world_live.linear() * Eigen::Vector3d(side, 0.0, 0.5), 0.0));
   }
-  const auto database = roomDatabase(room, camera, poses);
+  const auto database = roomDatabase(q, poses);
   ASSERT_EQ(database->size(), 2u);
   const auto [lo, hi] = database->positionBounds();
   EXPECT_NEAR((hi - lo).norm(), 0.1, 1e-9);
   EXPECT_NEAR(database->positionReach(), 0.1 * std::sqrt(3.0) / 2.0, 1e-9);
   // One position has no reach and bounds nothing: its search takes the pose.
-  const auto single = roomDatabase(room, camera, {poses.front()});
+  const auto single = roomDatabase(q, {poses.front()});
   EXPECT_EQ(single->positionReach(), 0.0);
-  const Result<LocalizationResult> one = searchOnce(room, camera, single, {}, live->gray, T_world_live);
+  const Result<LocalizationResult> one = searchOnce(q, single, {});
   ASSERT_TRUE(one.ok()) << one.error().message;
   ASSERT_EQ(one->state, TrackingState::kRelocalized);
   EXPECT_LT((one->T_world_camera.translation() - T_world_live.translation()).norm(), 0.01);
   for (bool inside : {false, true}) {
     RelocalizationOptions relocalization;
     relocalization.inside_database_box = inside;
-    const Result<LocalizationResult> r = searchOnce(room, camera, database, relocalization, live->gray, T_world_live);
+    const Result<LocalizationResult> r = searchOnce(q, database, relocalization);
     ASSERT_TRUE(r.ok()) << r.error().message;
     if (inside) {
       EXPECT_EQ(r->state, TrackingState::kInitializing);
