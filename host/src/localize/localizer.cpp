@@ -256,7 +256,8 @@ struct Localizer::Impl {
   // Relocalization and global initialization (RelocalizationOptions).
   std::shared_ptr<const KeyframeDatabase> database;
   double database_reach_m = 0;  ///< KeyframeDatabase::positionReach: a search region grows by it.
-  /// KeyframeDatabase::positionBounds grown by database_reach_m (RelocalizationOptions::inside_database_box).
+  /// KeyframeDatabase::positionBounds grown by database_reach_m; infinite when
+  /// RelocalizationOptions::inside_database_box is off or the reach is 0.
   Eigen::Vector3d database_min = Eigen::Vector3d::Zero(), database_max = Eigen::Vector3d::Zero();
   uint64_t model_fingerprint = 0;
   bool searching = false;                     ///< Global initialization in progress (startSearch).
@@ -741,7 +742,7 @@ struct Localizer::Impl {
         Result<std::optional<FeaturePose>> pose =
             featurePose(*live_features, *render_features, keyframe->depth, camera, T_candidate, o.features);
         if (!pose.ok()) return pose.error();
-        if (pose->has_value() && isValidPose((*pose)->T_world_camera)) {
+        if (pose->has_value()) {  // featurePose gives only valid poses
           // Aligned fully from the feature pose itself (no probe on the deepest level, whose
           // few points can wander decimetres from a start a few centimetres off); ranked by
           // feature support below.
@@ -867,8 +868,8 @@ struct Localizer::Impl {
       const double score =
           verificationScore(verificationFeatures(track, keyframes->current()->scene_depth_m), options.verification);
       const Eigen::Vector3d& position = track.T_world_camera.translation();
-      const bool inside = !o.inside_database_box || ((position.array() >= database_min.array()).all() &&
-                                                     (position.array() <= database_max.array()).all());
+      const bool inside =
+          (position.array() >= database_min.array()).all() && (position.array() <= database_max.array()).all();
       if (track.state == TrackingState::kTracking && score >= options.verification.min_score && inside) {
         refined.push_back(Refined{std::move(track), score, keyframes->current(), p.candidate});
       }
@@ -1210,11 +1211,11 @@ Status Localizer::setKeyframeDatabase(std::shared_ptr<const KeyframeDatabase> da
   }
   m.database = std::move(database);
   m.database_reach_m = m.database ? m.database->positionReach() : 0.0;
-  if (m.database && m.database_reach_m > 0) {
+  if (m.database && m.database_reach_m > 0 && m.options.relocalization.inside_database_box) {
     const auto [lo, hi] = m.database->positionBounds();
     m.database_min = lo.array() - m.database_reach_m;
     m.database_max = hi.array() + m.database_reach_m;
-  } else {  // a single position (or none) bounds nothing
+  } else {  // not asked for, or a single position (or none): nothing bounds a found pose
     m.database_min = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
     m.database_max = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   }
