@@ -41,6 +41,7 @@ struct RelocBenchArgs {
   int candidates = RelocalizationOptions{}.candidates;
   int refined = RelocalizationOptions{}.refined_probes;
   int rerank = RelocalizationOptions{}.rerank_candidates;
+  double rerank_bits_weight = RelocalizationOptions{}.rerank_bits_weight;
   bool top_first = RelocalizationOptions{}.top_candidate_first;
   bool feature_starts = RelocalizationOptions{}.feature_starts;
   bool inside_box = RelocalizationOptions{}.inside_database_box;
@@ -84,6 +85,7 @@ std::unique_ptr<Localizer> makeLocalizer(const Setup& s, const RelocBenchArgs& a
   options.relocalization.candidates = a.candidates;
   options.relocalization.refined_probes = a.refined;
   options.relocalization.rerank_candidates = a.rerank;
+  options.relocalization.rerank_bits_weight = a.rerank_bits_weight;
   options.relocalization.top_candidate_first = a.top_first;
   options.relocalization.feature_starts = a.feature_starts;
   options.relocalization.inside_database_box = a.inside_box;
@@ -226,7 +228,8 @@ void runQueries(const Setup& s, const RelocBenchArgs& a) {
       percentile(top_m, 0.5), percentile(top_deg, 0.5), queries.size() - in_window);
   if (a.rerank > a.candidates) {
     std::printf(
-        "%s: retrieval after the re-ranking (the search's first of the %d nearest, ranked by phase correlation): "
+        "%s: retrieval after the re-ranking (the search's first of the %d nearest, ranked by phase correlation and "
+        "descriptor distance): "
         "%.1f %% (median %.2f m, %.1f deg)\n",
         s.seq.name.c_str(), a.rerank, 100.0 * retrieved_ranked / nq, percentile(ranked_m, 0.5),
         percentile(ranked_deg, 0.5));
@@ -431,6 +434,11 @@ void addRelocBench(CLI::App& bench) {
       ->capture_default_str();
   reloc->add_option("--rerank", args->rerank, "Nearest keyframes rendered small and re-ranked (0: none)")
       ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
+  reloc
+      ->add_option("--rerank-bits-weight", args->rerank_bits_weight,
+                   "Re-ranking: phase-correlation peak lost per bit of descriptor distance (0: the peak alone)")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   reloc
       ->add_option("--confirm-start", args->confirm_start,

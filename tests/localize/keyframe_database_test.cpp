@@ -472,6 +472,46 @@ TEST(Relocalization, SearchesFindViewsAllRoundTheScene) {
   EXPECT_GE(found, 6) << "of 8";
 }
 
+TEST(Relocalization, TheReRankingPutsAKeyframesOwnViewFirst) {
+  // A database keyframe's own view, searched in a window holding many keyframes: its render
+  // shifts by nothing (the highest phase-correlation peak) and its descriptor is the nearest, so
+  // the re-ranking's first is that keyframe, for the peak alone, the descriptor's distance alone
+  // (a weight so large it decides) and both.
+  const auto& db = asymmetricDatabase();
+  ASSERT_TRUE(db);
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<size_t> pick(0, db->size() - 1);
+  for (double weight : {0.0, RelocalizationOptions{}.rerank_bits_weight, 1.0}) {
+    LocalizerOptions options;
+    options.relocalization.rerank_bits_weight = weight;
+    options.relocalization.rerank_candidates = 30;
+    auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
+    ASSERT_TRUE(created.ok()) << created.error().message;
+    Localizer& localizer = **created;
+    ASSERT_TRUE(localizer.setKeyframeDatabase(db).ok());
+    for (int trial = 0; trial < 3; ++trial) {
+      const size_t index = pick(rng);
+      const Pose& T_world_keyframe = db->keyframes()[index].T_world_camera;
+      const auto view = renderReference(test::makeAsymmetricScene(), test::localizeCamera(), T_world_keyframe);
+      ASSERT_TRUE(view.ok());
+      const SearchRegion region{T_world_keyframe.translation(), 1.2};
+      EXPECT_GT(db->query(*globalDescriptor(view->gray), 1000, region).size(),
+                static_cast<size_t>(options.relocalization.rerank_candidates))
+          << "the window holds more keyframes than are re-ranked";
+      ASSERT_TRUE(localizer.startSearch(region).ok());
+      const Result<LocalizationResult> r = localizer.localize(1 + trial, view->gray);
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      EXPECT_EQ(r->relocalization_top_keyframe, static_cast<int64_t>(index))
+          << "weight " << weight << ", trial " << trial;
+    }
+  }
+  LocalizerOptions bad;
+  bad.relocalization.rerank_bits_weight = NAN;
+  EXPECT_FALSE(Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
+  bad.relocalization.rerank_bits_weight = -0.1;
+  EXPECT_FALSE(Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
+}
+
 TEST(Relocalization, APoseThatAlignmentsFromTwoKeyframesReachNeedsNoHighScore) {
   // No pose can reach a score of 1 alone: without agreement nothing is found; with it, the
   // searches find true poses (where two candidates' alignments meet) and nothing wrong.

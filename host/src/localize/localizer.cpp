@@ -80,7 +80,8 @@ Status validateOptions(const LocalizerOptions& o) {
       !finiteIn(l.min_contrast, 0.0, 255.0) || !finiteIn(l.min_score, 0.0, 1.0) ||
       !finiteIn(l.confident_score, 0.0, 1.0) || !finiteIn(l.min_response, 0.0, 1.0) || l.agreeing_candidates < 0 ||
       l.agreeing_candidates > 100 || l.agreement_probes < 0 || l.agreement_probes > 100 ||
-      !finiteIn(l.agree_depth_fraction, 0.0, 1.0) || !finiteIn(l.agree_deg, 0.0, 180.0)) {
+      !finiteIn(l.agree_depth_fraction, 0.0, 1.0) || !finiteIn(l.agree_deg, 0.0, 180.0) ||
+      !finiteIn(l.rerank_bits_weight, 0.0, 1.0)) {
     return makeError(
         ErrorCode::kInvalidArgument,
         "Localizer: relocalization needs candidates and refined_probes in 1..100, rerank_candidates in "
@@ -88,7 +89,7 @@ Status validateOptions(const LocalizerOptions& o) {
         "depth_step in 0..1, after_untracked_frames >= 0, refinements "
         "in 0..10, shift_starts in 0..5, radii and growth >= 0, min_contrast in 0..255 and scores and "
         "min_response in 0..1, agreeing_candidates and agreement_probes in 0..100, agree_depth_fraction in "
-        "0..1 and agree_deg in 0..180");
+        "0..1, agree_deg in 0..180 and rerank_bits_weight in 0..1");
   }
   if (l.feature_starts) VKLOC_TRY_STATUS(validateFeaturePoseOptions(l.features));
   if (!finiteIn(l.feature_agree_fraction, 0.0, 1.0) || !finiteIn(l.feature_agree_deg, 0.0, 180.0)) {
@@ -623,7 +624,8 @@ struct Localizer::Impl {
         database->query(*descriptor, static_cast<size_t>(std::max(o.candidates, o.rerank_candidates)), searched);
     if (candidates.size() > static_cast<size_t>(o.candidates)) {
       // Re-ranking: each candidate rendered 160 pixels wide and compared with the live image by
-      // the peak of their phase correlation (a shift of the whole view does not lower it).
+      // the peak of their phase correlation (a shift of the whole view does not lower it), less
+      // rerank_bits_weight per bit of its descriptor's distance.
       const auto t_rank = SteadyClock::now();
       const PinholeCamera small = scaledCamera(camera, 160);
       ImageU8 live_small(small.width, small.height, 1);
@@ -637,7 +639,8 @@ struct Localizer::Impl {
         if (!view.ok()) return view.error();
         Result<std::vector<ImageShift>> shift =
             estimateImageShifts(view->gray, live_small, small, Eigen::Matrix3d::Identity(), 0, 1);
-        ranked.emplace_back(shift.ok() && !shift->empty() ? shift->front().response : 0.0, k);
+        const double peak = shift.ok() && !shift->empty() ? shift->front().response : 0.0;
+        ranked.emplace_back(peak - o.rerank_bits_weight * candidates[k].distance, k);
       }
       std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
       std::vector<KeyframeCandidate> kept;
