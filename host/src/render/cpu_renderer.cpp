@@ -124,7 +124,13 @@ void sampleBilinearRepeat(const Texture& tex, double s, double t, double rgb[3])
   const double y0 = std::floor(y);
   const double ax = x - x0;
   const double ay = y - y0;
+  // k is a whole number; k mod n in 0..n-1 (in integers where k fits, as it does for any uv a
+  // model holds in practice).
   auto wrap = [](double k, int n) {
+    if (std::abs(k) < 1e15) {
+      const int64_t m = static_cast<int64_t>(k) % n;
+      return static_cast<int>(m < 0 ? m + n : m);
+    }
     double m = std::fmod(k, static_cast<double>(n));
     if (m < 0) m += n;
     const int i = static_cast<int>(m);
@@ -228,6 +234,8 @@ class Rasterizer {
         cam_(camera),
         settings_(settings),
         out_(out),
+        shade_((settings.outputs & kRenderColor) != 0),
+        winner_(static_cast<size_t>(camera.width) * camera.height, -1),
         depth_(static_cast<size_t>(camera.width) * camera.height, std::numeric_limits<double>::infinity()) {
     const size_t nv = model.vertexCount();
     p_camera_.resize(nv);
@@ -251,8 +259,10 @@ class Rasterizer {
     }
   }
 
-  /// Writes the double depth buffer into the float output.
+  /// Shades the pixels (colour asked for) and writes the double depth buffer into the float
+  /// output.
   void finish() {
+    if (shade_) shadeWinners();
     for (size_t i = 0; i < depth_.size(); ++i) {
       out_.depth.data[i] = std::isfinite(depth_[i]) ? static_cast<float>(depth_[i]) : kBackgroundDepth;
     }
@@ -264,6 +274,32 @@ class Rasterizer {
     const Texture* base = nullptr;
     const std::vector<Texture>* levels = nullptr;
   };
+
+  /// What colouring a pixel of one rasterized triangle needs (shadeWinners).
+  struct Shading {
+    Edge edge[3];
+    double inv_z[3];
+    std::array<double, kAttributeCount> attribute[3];  ///< Of corners a, b, c.
+    TextureRef tex;
+    std::array<double, 3> base;
+  };
+
+  /// Perspective-correct texture coordinates in level-0 texels at any point of the triangle's
+  /// plane (inside or not); false where the point's ray misses the plane's front.
+  static bool texelsAt(const Shading& sh, double pu, double pv, double st[2]) {
+    double wk[3];
+    double w_sum = 0;
+    for (int k = 0; k < 3; ++k) {
+      wk[k] = sh.edge[k].eval(pu, pv) * sh.inv_z[k];
+      w_sum += wk[k];
+    }
+    if (!(w_sum > 0)) return false;
+    st[0] = (wk[0] * sh.attribute[0][0] + wk[1] * sh.attribute[1][0] + wk[2] * sh.attribute[2][0]) / w_sum *
+            sh.tex.base->width;
+    st[1] = (wk[0] * sh.attribute[0][1] + wk[1] * sh.attribute[1][1] + wk[2] * sh.attribute[2][1]) / w_sum *
+            sh.tex.base->height;
+    return std::isfinite(st[0]) && std::isfinite(st[1]);
+  }
 
   ClipVertex vertex(uint32_t index) const {
     ClipVertex c;
@@ -338,20 +374,6 @@ class Rasterizer {
     if (area == 0 || !std::isfinite(area)) return;
     // Edge k is opposite corner k; its value is corner k's (unnormalised) barycentric.
     const Edge edge[3] = {makeEdge(s[1], s[2], area), makeEdge(s[2], s[0], area), makeEdge(s[0], s[1], area)};
-    // Perspective-correct texture coordinates in level-0 texels at any point of the triangle's
-    // plane (inside or not); false where the point's ray misses the plane's front.
-    auto texelsAt = [&](double pu, double pv, double st[2]) {
-      double wk[3];
-      double w_sum = 0;
-      for (int k = 0; k < 3; ++k) {
-        wk[k] = edge[k].eval(pu, pv) * inv_z[k];
-        w_sum += wk[k];
-      }
-      if (!(w_sum > 0)) return false;
-      st[0] = (wk[0] * a.attribute[0] + wk[1] * b.attribute[0] + wk[2] * c.attribute[0]) / w_sum * tex.base->width;
-      st[1] = (wk[0] * a.attribute[1] + wk[1] * b.attribute[1] + wk[2] * c.attribute[1]) / w_sum * tex.base->height;
-      return std::isfinite(st[0]) && std::isfinite(st[1]);
-    };
 
     const double u_min = std::min({s[0].u, s[1].u, s[2].u});
     const double u_max = std::max({s[0].u, s[1].u, s[2].u});
@@ -367,6 +389,7 @@ class Rasterizer {
     const double ny = plane_n.y();
     const double nz = plane_n.z();
     const int w = cam_.width;
+    int32_t id = -1;  ///< This triangle's Shading, once a pixel shows it.
     for (int j = static_cast<int>(j_lo); j <= static_cast<int>(j_hi); ++j) {
       const double v = j;
       const double ray_y = (v - cam_.cy) / cam_.fy;
@@ -389,34 +412,66 @@ class Rasterizer {
         if (!out_.normals.empty()) {
           for (int ch = 0; ch < 3; ++ch) out_.normals.data[idx * 3 + ch] = normal[ch];
         }
+        if (!shade_) continue;  // colour not asked for: it stays the background
+        // Shaded once per pixel after all triangles (shadeWinners): a surface drawn over later
+        // costs no texture lookups.
+        if (id < 0) {
+          id = static_cast<int32_t>(shadings_.size());
+          shadings_.push_back(Shading{{edge[0], edge[1], edge[2]},
+                                      {inv_z[0], inv_z[1], inv_z[2]},
+                                      {a.attribute, b.attribute, c.attribute},
+                                      tex,
+                                      base});
+        }
+        winner_[idx] = id;
+      }
+    }
+  }
+
+  /// Colour of every pixel from the triangle that won its depth test: perspective-correct
+  /// attributes, the texture's level of detail over the pixel's 2 x 2 quad (file comment) and
+  /// output = round(255 * texture * vertex colour * base colour), all plain 0..1 values.
+  void shadeWinners() {
+    const int w = cam_.width;
+    for (int j = 0; j < cam_.height; ++j) {
+      for (int i = 0; i < w; ++i) {
+        const size_t idx = static_cast<size_t>(j) * w + i;
+        if (winner_[idx] < 0) continue;
+        const Shading& sh = shadings_[static_cast<size_t>(winner_[idx])];
+        const double u = i, v = j;
+        double e[3];
+        for (int k = 0; k < 3; ++k) e[k] = sh.edge[k].eval(u, v);
         // Perspective-correct barycentrics: screen barycentrics e_k / sum(e) weighted by 1/z_k.
         const double e_sum = e[0] + e[1] + e[2];
         double wk[3];
         double w_sum = 0;
         for (int k = 0; k < 3; ++k) {
-          wk[k] = (e_sum > 0 ? e[k] / e_sum : 1.0 / 3.0) * inv_z[k];
+          wk[k] = (e_sum > 0 ? e[k] / e_sum : 1.0 / 3.0) * sh.inv_z[k];
           w_sum += wk[k];
         }
         double attr[kAttributeCount];
         for (int m = 0; m < kAttributeCount; ++m) {
-          attr[m] = (wk[0] * a.attribute[m] + wk[1] * b.attribute[m] + wk[2] * c.attribute[m]) / w_sum;
+          attr[m] = (wk[0] * sh.attribute[0][m] + wk[1] * sh.attribute[1][m] + wk[2] * sh.attribute[2][m]) / w_sum;
         }
         double tex_rgb[3] = {1.0, 1.0, 1.0};
-        if (tex.base != nullptr) {
+        if (sh.tex.base != nullptr) {
           // Level of detail of the pixel's 2 x 2 quad (file comment).
           const double x0 = i & ~1, y0 = j & ~1;
           double st00[2], st10[2], st01[2];
           double rho = 0;
-          if (texelsAt(x0, y0, st00) && texelsAt(x0 + 1, y0, st10) && texelsAt(x0, y0 + 1, st01)) {
-            rho = std::max(std::hypot(st10[0] - st00[0], st10[1] - st00[1]),
-                           std::hypot(st01[0] - st00[0], st01[1] - st00[1]));
+          if (texelsAt(sh, x0, y0, st00) && texelsAt(sh, x0 + 1, y0, st10) && texelsAt(sh, x0, y0 + 1, st01)) {
+            const double dx0 = st10[0] - st00[0], dx1 = st10[1] - st00[1];
+            const double dy0 = st01[0] - st00[0], dy1 = st01[1] - st00[1];
+            rho = std::sqrt(std::max(dx0 * dx0 + dx1 * dx1, dy0 * dy0 + dy1 * dy1));
+            if (!std::isfinite(rho)) {  // the squares overflowed
+              rho = std::max(std::hypot(dx0, dx1), std::hypot(dy0, dy1));
+            }
           }
-          sampleTrilinearRepeat(*tex.base, *tex.levels, attr[0], attr[1], rho, tex_rgb);
+          sampleTrilinearRepeat(*sh.tex.base, *sh.tex.levels, attr[0], attr[1], rho, tex_rgb);
         }
-        // output = round(255 * texture * vertex colour * base colour), all plain 0..1 values.
         uint8_t* px = &out_.rgba.data[idx * 4];
         for (int ch = 0; ch < 3; ++ch) {
-          const double value = std::clamp(tex_rgb[ch] * attr[2 + ch] * base[ch], 0.0, 1.0) * 255.0;
+          const double value = std::clamp(tex_rgb[ch] * attr[2 + ch] * sh.base[ch], 0.0, 1.0) * 255.0;
           px[ch] = static_cast<uint8_t>(std::lround(value));
         }
         px[3] = 255;
@@ -429,6 +484,9 @@ class Rasterizer {
   const PinholeCamera& cam_;
   const RenderSettings& settings_;
   RenderOutput& out_;
+  const bool shade_;                       ///< Colour asked for (RenderSettings::outputs).
+  std::vector<Shading> shadings_;          ///< Of the triangles some pixel showed.
+  std::vector<int32_t> winner_;            ///< Per pixel: its Shading, -1 where none.
   std::vector<Eigen::Vector3d> p_camera_;  ///< Vertices in the camera frame.
   std::vector<double> depth_;              ///< Camera z per pixel, +inf where empty.
 };

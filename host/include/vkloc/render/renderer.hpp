@@ -14,7 +14,9 @@
 
 namespace vkloc {
 
-/// Which outputs a render fills. Colour and depth are always produced.
+/// Which outputs a render fills. Depth is always produced. Without kRenderColor the colour and
+/// gray images may hold only the background (the CPU renderer then skips shading; a device
+/// renderer fills them anyway).
 enum RenderOutputFlags : uint32_t {
   kRenderColor = 1u << 0,    ///< RGBA8 and 8-bit gray.
   kRenderDepth = 1u << 1,    ///< Linear metric depth.
