@@ -113,6 +113,13 @@ Edge makeEdge(const ScreenVertex& from, const ScreenVertex& to, double area) {
   return e;
 }
 
+/// v / 255.0 for every byte v (the same quotients, looked up instead of divided per texel).
+const std::array<double, 256> kByteUnit = [] {
+  std::array<double, 256> unit{};
+  for (int v = 0; v < 256; ++v) unit[static_cast<size_t>(v)] = v / 255.0;
+  return unit;
+}();
+
 /// Bilinear texture lookup with REPEAT wrap; texel k's centre is at uv = (k + 0.5) / size
 /// and (0, 0) is the top-left of the image. Writes 0..1 RGB.
 void sampleBilinearRepeat(const Texture& tex, double s, double t, double rgb[3]) {
@@ -141,7 +148,7 @@ void sampleBilinearRepeat(const Texture& tex, double s, double t, double rgb[3])
   const int ya = wrap(y0, tex.height);
   const int yb = wrap(y0 + 1, tex.height);
   auto texel = [&](int xi, int yi, int channel) -> double {
-    return tex.rgba[(static_cast<size_t>(yi) * tex.width + xi) * 4 + channel] / 255.0;
+    return kByteUnit[tex.rgba[(static_cast<size_t>(yi) * tex.width + xi) * 4 + channel]];
   };
   for (int ch = 0; ch < 3; ++ch) {
     rgb[ch] = (1 - ay) * ((1 - ax) * texel(xa, ya, ch) + ax * texel(xb, ya, ch)) +
@@ -149,11 +156,11 @@ void sampleBilinearRepeat(const Texture& tex, double s, double t, double rgb[3])
   }
 }
 
-/// Trilinear lookup with REPEAT wrap at level of detail log2(rho) (see the file comment): `rho`
-/// is the pixel footprint in level-0 texels; levels[k] is mip level k + 1 of `base`.
-void sampleTrilinearRepeat(const Texture& base, const std::vector<Texture>& levels, double s, double t, double rho,
+/// Trilinear lookup with REPEAT wrap at level of detail `lambda` = log2(rho) (see the file
+/// comment; 0 where rho is 0 or not finite), rho the pixel footprint in level-0 texels;
+/// levels[k] is mip level k + 1 of `base`.
+void sampleTrilinearRepeat(const Texture& base, const std::vector<Texture>& levels, double s, double t, double lambda,
                            double rgb[3]) {
-  const double lambda = rho > 0 && std::isfinite(rho) ? std::log2(rho) : 0.0;
   if (!(lambda > 0) || levels.empty()) {
     sampleBilinearRepeat(base, s, t, rgb);
     return;
@@ -433,7 +440,12 @@ class Rasterizer {
   /// output = round(255 * texture * vertex colour * base colour), all plain 0..1 values.
   void shadeWinners() {
     const int w = cam_.width;
+    // The level of detail (lambda) of a 2 x 2 quad, kept for the quad's other pixels that show the same
+    // triangle (quad_winner: that triangle's Shading, -1 none yet), for the current row pair.
+    std::vector<int32_t> quad_winner(static_cast<size_t>(w / 2 + 1));
+    std::vector<double> quad_lambda(quad_winner.size());
     for (int j = 0; j < cam_.height; ++j) {
+      if ((j & 1) == 0) std::fill(quad_winner.begin(), quad_winner.end(), -1);
       for (int i = 0; i < w; ++i) {
         const size_t idx = static_cast<size_t>(j) * w + i;
         if (winner_[idx] < 0) continue;
@@ -456,18 +468,23 @@ class Rasterizer {
         double tex_rgb[3] = {1.0, 1.0, 1.0};
         if (sh.tex.base != nullptr) {
           // Level of detail of the pixel's 2 x 2 quad (file comment).
-          const double x0 = i & ~1, y0 = j & ~1;
-          double st00[2], st10[2], st01[2];
-          double rho = 0;
-          if (texelsAt(sh, x0, y0, st00) && texelsAt(sh, x0 + 1, y0, st10) && texelsAt(sh, x0, y0 + 1, st01)) {
-            const double dx0 = st10[0] - st00[0], dx1 = st10[1] - st00[1];
-            const double dy0 = st01[0] - st00[0], dy1 = st01[1] - st00[1];
-            rho = std::sqrt(std::max(dx0 * dx0 + dx1 * dx1, dy0 * dy0 + dy1 * dy1));
-            if (!std::isfinite(rho)) {  // the squares overflowed
-              rho = std::max(std::hypot(dx0, dx1), std::hypot(dy0, dy1));
+          const size_t quad = static_cast<size_t>(i / 2);
+          if (quad_winner[quad] != winner_[idx]) {
+            const double x0 = i & ~1, y0 = j & ~1;
+            double st00[2], st10[2], st01[2];
+            double rho = 0;
+            if (texelsAt(sh, x0, y0, st00) && texelsAt(sh, x0 + 1, y0, st10) && texelsAt(sh, x0, y0 + 1, st01)) {
+              const double dx0 = st10[0] - st00[0], dx1 = st10[1] - st00[1];
+              const double dy0 = st01[0] - st00[0], dy1 = st01[1] - st00[1];
+              rho = std::sqrt(std::max(dx0 * dx0 + dx1 * dx1, dy0 * dy0 + dy1 * dy1));
+              if (!std::isfinite(rho)) {  // the squares overflowed
+                rho = std::max(std::hypot(dx0, dx1), std::hypot(dy0, dy1));
+              }
             }
+            quad_winner[quad] = winner_[idx];
+            quad_lambda[quad] = rho > 0 && std::isfinite(rho) ? std::log2(rho) : 0.0;
           }
-          sampleTrilinearRepeat(*sh.tex.base, *sh.tex.levels, attr[0], attr[1], rho, tex_rgb);
+          sampleTrilinearRepeat(*sh.tex.base, *sh.tex.levels, attr[0], attr[1], quad_lambda[quad], tex_rgb);
         }
         uint8_t* px = &out_.rgba.data[idx * 4];
         for (int ch = 0; ch < 3; ++ch) {
