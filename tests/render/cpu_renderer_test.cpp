@@ -397,10 +397,14 @@ TEST(ReferenceRender, ColourIsTextureTimesVertexColourTimesBaseColour) {
   Texture tex;
   tex.width = 2;
   tex.height = 2;
-  for (int k = 0; k < 4; ++k) tex.rgba.insert(tex.rgba.end(), {200, 100, 50, 255});
+  for (int k = 0; k < 4; ++k) {
+    for (int c : {200, 100, 50, 255}) tex.rgba.push_back(static_cast<uint8_t>(c));
+  }
   quad.textures = {tex};
   quad.materials = {Material{"m", {0.5f, 1.0f, 0.25f, 1.0f}, 0}};
-  for (size_t v = 0; v < quad.vertexCount(); ++v) quad.colors.insert(quad.colors.end(), {255, 128, 64, 255});
+  for (size_t v = 0; v < quad.vertexCount(); ++v) {
+    for (int c : {255, 128, 64, 255}) quad.colors.push_back(static_cast<uint8_t>(c));
+  }
   const RenderOutput out = renderOk(quad, cam, Pose::Identity());
   // round(255 * tex * vertex * base): 200 * 0.5, 100 * 128 / 255, 50 * 64 / 255 * 0.25.
   EXPECT_EQ(out.rgba.at(320, 240, 0), 100);
@@ -663,6 +667,48 @@ TEST(ReferenceRender, EqualDepthKeepsFirstDrawn) {
   const RenderOutput out = renderOk(model, cam, Pose::Identity());
   ASSERT_TRUE(covered(out, 320, 240));
   EXPECT_EQ(out.rgba.at(320, 240, 0), 100);
+}
+
+TEST(ReferenceRender, TheNearestSurfaceGivesTheColourInEitherDrawingOrderAndDepthOnlyRendersAreNotShaded) {
+  // Pixels are shaded after every triangle's depth test: the colour is the nearest surface's,
+  // whether it was drawn first or last.
+  const PinholeCamera cam;
+  for (bool near_first : {true, false}) {
+    Model model;
+    for (int k = 0; k < 2; ++k) {
+      const bool near = (k == 0) == near_first;
+      const double z = near ? 2.0 : 4.0;
+      for (const Eigen::Vector3d& p :
+           {Eigen::Vector3d(-z, -z, z), Eigen::Vector3d(z, -z, z), Eigen::Vector3d(0, z, z)}) {
+        model.indices.push_back(test::addVertex(model, p));
+        const uint8_t rgba[4] = {static_cast<uint8_t>(near ? 40 : 220), 0, 0, 255};
+        for (uint8_t c : rgba) model.colors.push_back(c);
+      }
+    }
+    test::finishSingleBlock(model);
+    const RenderOutput out = renderOk(model, cam, Pose::Identity());
+    ASSERT_TRUE(covered(out, 320, 240));
+    EXPECT_NEAR(out.depth.at(320, 240), 2.0f, 1e-5f);
+    EXPECT_EQ(out.rgba.at(320, 240, 0), 40) << (near_first ? "near drawn first" : "near drawn last");
+  }
+  // Depth alone: the same depths and normals as a full render, colour left as the background.
+  const Model scene = test::makeBoxOnGround();  // textured
+  const Pose T_world_camera = test::cameraLookingAt({1.5, -1.0, 1.2}, {0.0, 0.0, 0.1});
+  RenderSettings depth_only;
+  depth_only.outputs = kRenderDepth | kRenderNormals;
+  depth_only.background_rgba = {7, 8, 9, 10};
+  const RenderOutput full = renderOk(scene, cam, T_world_camera);
+  const RenderOutput bare = renderOk(scene, cam, T_world_camera, depth_only);
+  EXPECT_EQ(full.depth.data, bare.depth.data);
+  EXPECT_EQ(full.normals.data, bare.normals.data);
+  size_t shaded = 0;
+  for (int j = 0; j < cam.height; ++j) {
+    for (int i = 0; i < cam.width; ++i) {
+      shaded += covered(full, i, j);
+      for (int ch = 0; ch < 4; ++ch) ASSERT_EQ(bare.rgba.at(i, j, ch), depth_only.background_rgba[ch]);
+    }
+  }
+  EXPECT_GT(shaded, static_cast<size_t>(cam.width) * cam.height / 4) << "the scene fills the view";
 }
 
 // --- 9. back-face culling ----------------------------------------------------------------------
