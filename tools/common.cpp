@@ -126,6 +126,11 @@ void ViewArgs::add(CLI::App& app) {
                  "--view-size is a central crop; else 90)");
   app.add_option("--view-pitch", pitch_deg, "Stabilised view: axis angle below the horizon, degrees (90 = down)")
       ->capture_default_str();
+  app.add_option("--view-dead-band", dead_band_deg,
+                 "Stabilised view: fixed to the lens while the compensation is at most this angle, degrees (0 = "
+                 "always compensated)")
+      ->check(CLI::Range(0.0, 90.0))
+      ->capture_default_str();
   app.add_option("--view-flat-field", flat_field_sigma_px,
                  "Divide the view by its local mean brightness (Gaussian sigma, view pixels; 0 = off): evens out "
                  "vignetting before the edge thresholds")
@@ -147,6 +152,7 @@ ViewOptions ViewArgs::options(const Sequence& seq) const {
   }
   o.hfov_deg = hfov_deg;
   o.pitch_deg = pitch_deg;
+  o.dead_band_deg = dead_band_deg;
   o.flat_field_sigma_px = flat_field_sigma_px;
   o.interpolation = interpolation == "bicubic" ? RemapInterpolation::kBicubic : RemapInterpolation::kBilinear;
   if (seq.gravity_world.norm() > 0) o.up_world = -seq.gravity_world.normalized();

@@ -145,6 +145,50 @@ TEST(CameraFront, StabilisedViewHoldsItsPitchWithoutRollAndFollowsTheHeading) {
   }
 }
 
+TEST(CameraFront, ADeadBandKeepsTheLensViewUntilTheCompensationExceedsIt) {
+  ViewOptions o;
+  o.kind = ViewKind::kStabilised;
+  o.width = 200;
+  o.height = 150;
+  o.pitch_deg = 30;
+  auto full = CameraFront::create(fisheyeLens(), o);
+  o.dead_band_deg = 10;
+  auto banded = CameraFront::create(fisheyeLens(), o);
+  ASSERT_TRUE(full.ok() && banded.ok());
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> U(-0.3, 0.3);
+  int inside = 0, outside = 0;
+  for (int k = 0; k < 100; ++k) {
+    const Pose level = test::cameraLookingAt({0, 0, 0}, {1, 0, -std::tan(M_PI / 6)});
+    const Eigen::Matrix3d R_world_camera = level.linear() *
+                                           Eigen::AngleAxisd(U(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                                           Eigen::AngleAxisd(U(rng), Eigen::Vector3d::UnitX()).toRotationMatrix();
+    const Eigen::AngleAxisd compensation((*full)->viewRotation(R_world_camera));
+    const Eigen::Matrix3d R_camera_view = (*banded)->viewRotation(R_world_camera);
+    EXPECT_NEAR(R_camera_view.determinant(), 1.0, 1e-12);
+    const Eigen::AngleAxisd turn(R_camera_view);
+    if (compensation.angle() <= 10 * M_PI / 180) {
+      // Within the band: the lens's own view.
+      EXPECT_TRUE(R_camera_view.isIdentity(1e-12)) << k;
+      ++inside;
+    } else {
+      // Beyond: the excess about the same axis, so the view's axis lies 10 deg from the
+      // stabilised one.
+      EXPECT_NEAR(turn.angle(), compensation.angle() - 10 * M_PI / 180, 1e-9) << k;
+      EXPECT_GT(turn.axis().dot(compensation.axis()), 1 - 1e-9) << k;
+      const Eigen::Matrix3d R_view_stabilised = R_camera_view.transpose() * compensation.toRotationMatrix();
+      EXPECT_NEAR(Eigen::AngleAxisd(R_view_stabilised).angle() * 180 / M_PI, 10.0, 1e-6) << k;
+      ++outside;
+    }
+  }
+  EXPECT_GT(inside, 10);
+  EXPECT_GT(outside, 10);
+  o.dead_band_deg = -1;
+  EXPECT_FALSE(CameraFront::create(fisheyeLens(), o).ok());
+  o.dead_band_deg = NAN;
+  EXPECT_FALSE(CameraFront::create(fisheyeLens(), o).ok());
+}
+
 TEST(CameraFront, GridTableIsCloseToTheExactOne) {
   ViewOptions o;
   o.kind = ViewKind::kStabilised;

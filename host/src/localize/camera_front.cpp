@@ -46,6 +46,9 @@ Result<std::unique_ptr<CameraFront>> CameraFront::create(const LensCamera& lens,
   if (!(options.flat_field_sigma_px >= 0 && options.flat_field_sigma_px <= 1e4)) {
     return bad(fmt::format("flat field sigma {} px is outside 0..1e4", options.flat_field_sigma_px));
   }
+  if (!(options.dead_band_deg >= 0 && options.dead_band_deg <= 90)) {
+    return bad(fmt::format("dead band {} deg is outside 0..90", options.dead_band_deg));
+  }
   if (!(options.pitch_deg >= -89 && options.pitch_deg <= 90)) {
     return bad(fmt::format("pitch {} deg is outside -89..90", options.pitch_deg));
   }
@@ -110,7 +113,12 @@ Eigen::Matrix3d CameraFront::viewRotation(const Eigen::Matrix3d& R_world_camera)
   R_world_view.col(0) = x;
   R_world_view.col(1) = z.cross(x);
   R_world_view.col(2) = z;
-  return R_world_camera.transpose() * R_world_view;
+  const Eigen::Matrix3d R_camera_view = R_world_camera.transpose() * R_world_view;
+  if (!(options_.dead_band_deg > 0)) return R_camera_view;
+  const Eigen::AngleAxisd turn(R_camera_view);
+  const double band = options_.dead_band_deg * M_PI / 180.0;
+  if (turn.angle() <= band) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(turn.angle() - band, turn.axis()).toRotationMatrix();
 }
 
 Pose CameraFront::viewExtrinsic(const Pose& T_world_camera) const {

@@ -44,6 +44,12 @@ struct ViewOptions {
   double hfov_deg = 0;
   /// kStabilised: angle of the view's optical axis below the horizon, degrees (-89..90; 90 = down).
   double pitch_deg = 0;
+  /// kStabilised: dead band, degrees (0..90; 0 = every frame fully compensated). The view stays
+  /// fixed to the lens (its own central view, as kUndistorted) while the compensating rotation
+  /// is at most this angle, and beyond it turns by only the excess (about the same axis): the
+  /// view's axis stays within the band of the stabilised direction, and where the airframe's
+  /// attitude stays near its mean the view is the lens's centre.
+  double dead_band_deg = 0;
   /// kStabilised: world direction against gravity (normalized on use).
   Eigen::Vector3d up_world{0, 0, 1};
   /// kStabilised: the remap table is computed exactly every grid_step_px view pixels and
