@@ -228,11 +228,10 @@ void runQueries(const Setup& s, const RelocBenchArgs& a) {
       percentile(top_m, 0.5), percentile(top_deg, 0.5), queries.size() - in_window);
   if (a.rerank > a.candidates) {
     std::printf(
-        "%s: retrieval after the re-ranking (the search's first of the %d nearest, ranked by phase correlation and "
-        "descriptor distance): "
+        "%s: retrieval after the re-ranking (the search's first of the %d nearest, ranked by phase correlation%s): "
         "%.1f %% (median %.2f m, %.1f deg)\n",
-        s.seq.name.c_str(), a.rerank, 100.0 * retrieved_ranked / nq, percentile(ranked_m, 0.5),
-        percentile(ranked_deg, 0.5));
+        s.seq.name.c_str(), a.rerank, a.rerank_bits_weight > 0 ? " and descriptor distance" : "",
+        100.0 * retrieved_ranked / nq, percentile(ranked_m, 0.5), percentile(ranked_deg, 0.5));
   }
   std::printf(
       "%s: recovered (verified, within %.1f %% of depth and %.1f deg) %.1f %%, wrong poses accepted %zu; recovery "

@@ -160,7 +160,7 @@ void run(const TrackArgs& a) {
         f.options().kind == ViewKind::kStabilised
             ? fmt::format(
                   ", axis {:.0f} deg below the horizon{}", f.options().pitch_deg,
-                  f.options().dead_band_deg > 0 ? fmt::format(", dead band {:.0f} deg", f.options().dead_band_deg) : "")
+                  f.options().dead_band_deg > 0 ? fmt::format(", dead band {:g} deg", f.options().dead_band_deg) : "")
             : "");
     if (!a.overlay.dir.empty())
       throw Failure{"--overlay draws on pinhole images; it is not available with a camera front"};

@@ -125,8 +125,10 @@ const std::array<double, 256> kByteUnit = [] {
 void sampleBilinearRepeat(const Texture& tex, double s, double t, double rgb[3]) {
   if (!std::isfinite(s)) s = 0;
   if (!std::isfinite(t)) t = 0;
-  const double x = s * tex.width - 0.5;
-  const double y = t * tex.height - 0.5;
+  double x = s * tex.width - 0.5;
+  double y = t * tex.height - 0.5;
+  if (!std::isfinite(x)) x = -0.5;  // a finite uv so large that it overflows: as uv 0
+  if (!std::isfinite(y)) y = -0.5;
   const double x0 = std::floor(x);
   const double y0 = std::floor(y);
   const double ax = x - x0;
@@ -476,10 +478,7 @@ class Rasterizer {
             if (texelsAt(sh, x0, y0, st00) && texelsAt(sh, x0 + 1, y0, st10) && texelsAt(sh, x0, y0 + 1, st01)) {
               const double dx0 = st10[0] - st00[0], dx1 = st10[1] - st00[1];
               const double dy0 = st01[0] - st00[0], dy1 = st01[1] - st00[1];
-              rho = std::sqrt(std::max(dx0 * dx0 + dx1 * dx1, dy0 * dy0 + dy1 * dy1));
-              if (!std::isfinite(rho)) {  // the squares overflowed
-                rho = std::max(std::hypot(dx0, dx1), std::hypot(dy0, dy1));
-              }
+              rho = std::max(std::hypot(dx0, dx1), std::hypot(dy0, dy1));
             }
             quad_winner[quad] = winner_[idx];
             quad_lambda[quad] = rho > 0 && std::isfinite(rho) ? std::log2(rho) : 0.0;

@@ -45,10 +45,11 @@ struct ViewOptions {
   /// kStabilised: angle of the view's optical axis below the horizon, degrees (-89..90; 90 = down).
   double pitch_deg = 0;
   /// kStabilised: dead band, degrees (0..90; 0 = every frame fully compensated). The view stays
-  /// fixed to the lens (its own central view, as kUndistorted) while the compensating rotation
-  /// is at most this angle, and beyond it turns by only the excess (about the same axis): the
-  /// view's axis stays within the band of the stabilised direction, and where the airframe's
-  /// attitude stays near its mean the view is the lens's centre.
+  /// fixed to the lens (looking along the lens's axis, principal point at the view's centre)
+  /// while the compensating rotation (from the lens to the stabilised direction at pitch_deg, no
+  /// roll) is at most this angle, and beyond it turns by only the excess about the same axis:
+  /// the view's axis stays within the band of the stabilised direction. A lens mounted at
+  /// pitch_deg on an airframe that tilts less than the band sees through its own centre.
   double dead_band_deg = 0;
   /// kStabilised: world direction against gravity (normalized on use).
   Eigen::Vector3d up_world{0, 0, 1};

@@ -352,7 +352,8 @@ struct LocalizationResult {
   /// feature_starts).
   int relocalization_feature_starts = 0;
   /// Database index of the keyframe the search ranked first (nearest descriptor, re-ranked by
-  /// the phase correlation when RelocalizationOptions::rerank_candidates is on; -1: no search
+  /// the phase-correlation peak less RelocalizationOptions::rerank_bits_weight per bit of
+  /// descriptor distance when rerank_candidates is on; -1: no search
   /// ran or none lay in the region): the retrieval's answer, before any alignment.
   int64_t relocalization_top_keyframe = -1;
   double search_radius_m = 0;
