@@ -109,12 +109,26 @@ TEST(CameraFront, OpenCvRemapMatchesTheReference) {
   EXPECT_GT((*front)->validFraction(), 0.99);
 }
 
-TEST(CameraFront, StabilisedViewHoldsItsPitchWithoutRollAndFollowsTheHeading) {
+/// A 200x150 stabilised view with its axis 30 deg below the horizon.
+ViewOptions stabilisedThirtyDown() {
   ViewOptions o;
   o.kind = ViewKind::kStabilised;
   o.width = 200;
   o.height = 150;
   o.pitch_deg = 30;
+  return o;
+}
+
+/// A camera looking 30 deg down along heading psi (rad), then turned by yaw_rad about its own
+/// axis and pitched by pitch_rad.
+Eigen::Matrix3d shakenCamera(double psi, double yaw_rad, double pitch_rad) {
+  const Pose level = test::cameraLookingAt({0, 0, 0}, {std::cos(psi), std::sin(psi), -std::tan(M_PI / 6)});
+  return level.linear() * Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+         Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitX()).toRotationMatrix();
+}
+
+TEST(CameraFront, StabilisedViewHoldsItsPitchWithoutRollAndFollowsTheHeading) {
+  const ViewOptions o = stabilisedThirtyDown();
   auto front = CameraFront::create(fisheyeLens(), o);
   ASSERT_TRUE(front.ok()) << front.error().message;
   std::mt19937 rng(11);
@@ -122,10 +136,8 @@ TEST(CameraFront, StabilisedViewHoldsItsPitchWithoutRollAndFollowsTheHeading) {
   for (int k = 0; k < 50; ++k) {
     // A camera looking 30 deg down along heading psi, then rolled and pitched at random.
     const double psi = 6.0 * U(rng);
-    const Pose level = test::cameraLookingAt({0, 0, 0}, {std::cos(psi), std::sin(psi), -std::tan(M_PI / 6)});
-    const Eigen::Matrix3d R_world_camera = level.linear() *
-                                           Eigen::AngleAxisd(U(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() *
-                                           Eigen::AngleAxisd(U(rng), Eigen::Vector3d::UnitX()).toRotationMatrix();
+    const double yaw = U(rng);
+    const Eigen::Matrix3d R_world_camera = shakenCamera(psi, yaw, U(rng));
     const Eigen::Matrix3d R_world_view = R_world_camera * (*front)->viewRotation(R_world_camera);
     EXPECT_NEAR(R_world_view.determinant(), 1.0, 1e-12);
     // Axis 30 deg below the horizon, x axis level (no roll).
@@ -146,11 +158,7 @@ TEST(CameraFront, StabilisedViewHoldsItsPitchWithoutRollAndFollowsTheHeading) {
 }
 
 TEST(CameraFront, ADeadBandKeepsTheLensViewUntilTheCompensationExceedsIt) {
-  ViewOptions o;
-  o.kind = ViewKind::kStabilised;
-  o.width = 200;
-  o.height = 150;
-  o.pitch_deg = 30;
+  ViewOptions o = stabilisedThirtyDown();
   auto full = CameraFront::create(fisheyeLens(), o);
   o.dead_band_deg = 10;
   auto banded = CameraFront::create(fisheyeLens(), o);
@@ -159,10 +167,8 @@ TEST(CameraFront, ADeadBandKeepsTheLensViewUntilTheCompensationExceedsIt) {
   std::uniform_real_distribution<double> U(-0.3, 0.3);
   int inside = 0, outside = 0;
   for (int k = 0; k < 100; ++k) {
-    const Pose level = test::cameraLookingAt({0, 0, 0}, {1, 0, -std::tan(M_PI / 6)});
-    const Eigen::Matrix3d R_world_camera = level.linear() *
-                                           Eigen::AngleAxisd(U(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix() *
-                                           Eigen::AngleAxisd(U(rng), Eigen::Vector3d::UnitX()).toRotationMatrix();
+    const double yaw = U(rng);
+    const Eigen::Matrix3d R_world_camera = shakenCamera(0.0, yaw, U(rng));
     const Eigen::AngleAxisd compensation((*full)->viewRotation(R_world_camera));
     const Eigen::Matrix3d R_camera_view = (*banded)->viewRotation(R_world_camera);
     EXPECT_NEAR(R_camera_view.determinant(), 1.0, 1e-12);
