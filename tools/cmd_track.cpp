@@ -152,16 +152,15 @@ void run(const TrackArgs& a) {
   std::string view_line;
   if (view.front) {
     const CameraFront& f = *view.front;
-    view_line = fmt::format(
-        "camera front: {} {} lens {}x{} -> {} view {}x{}, hfov {:.1f} deg{}", lens_seq.camera.model,
-        f.lens().isIdealPinhole() ? "(ideal)" : "", f.lens().intrinsics.width, f.lens().intrinsics.height,
-        viewKindName(f.options().kind), camera.width, camera.height,
-        2.0 * std::atan(0.5 * camera.width / camera.fx) * 180.0 / M_PI,
-        f.options().kind == ViewKind::kStabilised
-            ? fmt::format(
-                  ", axis {:.0f} deg below the horizon{}", f.options().pitch_deg,
-                  f.options().dead_band_deg > 0 ? fmt::format(", dead band {:g} deg", f.options().dead_band_deg) : "")
-            : "");
+    std::string stabilised;
+    if (f.options().kind == ViewKind::kStabilised) {
+      stabilised = fmt::format(", axis {:.0f} deg below the horizon", f.options().pitch_deg);
+      if (f.options().dead_band_deg > 0) stabilised += fmt::format(", dead band {:g} deg", f.options().dead_band_deg);
+    }
+    view_line = fmt::format("camera front: {} {} lens {}x{} -> {} view {}x{}, hfov {:.1f} deg{}", lens_seq.camera.model,
+                            f.lens().isIdealPinhole() ? "(ideal)" : "", f.lens().intrinsics.width,
+                            f.lens().intrinsics.height, viewKindName(f.options().kind), camera.width, camera.height,
+                            2.0 * std::atan(0.5 * camera.width / camera.fx) * 180.0 / M_PI, stabilised);
     if (!a.overlay.dir.empty())
       throw Failure{"--overlay draws on pinhole images; it is not available with a camera front"};
     check(localizer->setCameraFront(std::move(view.front)));

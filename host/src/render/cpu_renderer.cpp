@@ -244,7 +244,7 @@ class Rasterizer {
         settings_(settings),
         out_(out),
         shade_((settings.outputs & kRenderColor) != 0),
-        winner_(static_cast<size_t>(camera.width) * camera.height, -1),
+        winner_(shade_ ? static_cast<size_t>(camera.width) * camera.height : 0, -1),
         depth_(static_cast<size_t>(camera.width) * camera.height, std::numeric_limits<double>::infinity()) {
     const size_t nv = model.vertexCount();
     p_camera_.resize(nv);
@@ -442,8 +442,8 @@ class Rasterizer {
   /// output = round(255 * texture * vertex colour * base colour), all plain 0..1 values.
   void shadeWinners() {
     const int w = cam_.width;
-    // The level of detail (lambda) of a 2 x 2 quad, kept for the quad's other pixels that show the same
-    // triangle (quad_winner: that triangle's Shading, -1 none yet), for the current row pair.
+    // The level of detail (lambda) of a 2 x 2 quad, kept for the quad's other pixels that show
+    // the same triangle (quad_winner: that triangle's Shading, -1 none yet), per row pair.
     std::vector<int32_t> quad_winner(static_cast<size_t>(w / 2 + 1));
     std::vector<double> quad_lambda(quad_winner.size());
     for (int j = 0; j < cam_.height; ++j) {
@@ -502,7 +502,7 @@ class Rasterizer {
   RenderOutput& out_;
   const bool shade_;                       ///< Colour asked for (RenderSettings::outputs).
   std::vector<Shading> shadings_;          ///< Of the triangles some pixel showed.
-  std::vector<int32_t> winner_;            ///< Per pixel: its Shading, -1 where none.
+  std::vector<int32_t> winner_;            ///< Per pixel: its Shading, -1 where none (empty: no shading).
   std::vector<Eigen::Vector3d> p_camera_;  ///< Vertices in the camera frame.
   std::vector<double> depth_;              ///< Camera z per pixel, +inf where empty.
 };
