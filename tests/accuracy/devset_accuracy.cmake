@@ -15,12 +15,16 @@
 #                 room's first 80 frames (from frame 86 its turn of ~190 deg/s needs the gyro: a
 #                 constant-velocity guess is degrees off; and without the gate a poorly verified
 #                 pose is taken, frame 17 at 54 mm = 3.3 % of the depth, so no bound on the largest)
+#   city_third, room_third  every third image (6.7 Hz; the city 3.75 m and up to 30 deg between
+#                 frames), from the first ground-truth pose at no velocity (synchronous keyframes):
+#                 no frame lost or bridged by the IMU alone, no reported pose beyond 2 % of the
+#                 median scene depth, median translation <= 0.3 % of it
 # Skipped when the sequences are not there (a "-- skipped: " line, ctest SKIP_REGULAR_EXPRESSION:
 # Debian 12 has CMake 3.25, without cmake_language(EXIT)).
 cmake_minimum_required(VERSION 3.22)
 include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
 
-string(REGEX REPLACE "(_starts(_db)?|_no_imu)$" "" scene "${CASE}")
+string(REGEX REPLACE "(_starts(_db)?|_no_imu|_third)$" "" scene "${CASE}")
 set(seq ${DATA}/cycles-${scene})
 if(NOT EXISTS ${seq}/sequence.yaml)
   message(STATUS "skipped: no development sequence at ${seq}")
@@ -65,6 +69,51 @@ if(CASE MATCHES "_starts(_db)?$")
     endif()
   endforeach()
   message(STATUS "${CASE}: ${passed} of ${count} starts tracked all 20 frames within 2 % of the depth")
+elseif(CASE MATCHES "_third$")
+  # A sequence folder of every third image: the same calibration, IMU, ground truth and model.
+  set(third ${WORK}/${CASE}_sequence)
+  file(REMOVE_RECURSE ${third})
+  file(MAKE_DIRECTORY ${third})
+  foreach(f sequence.yaml camera.yaml groundtruth.txt imu.csv)
+    file(COPY ${seq}/${f} DESTINATION ${third})
+  endforeach()
+  file(CREATE_LINK ${seq}/images ${third}/images SYMBOLIC)
+  file(CREATE_LINK ${seq}/model ${third}/model SYMBOLIC)
+  file(STRINGS ${seq}/images.txt lines)
+  set(kept "")
+  set(index 0)
+  foreach(line IN LISTS lines)
+    if(line MATCHES "^#")
+      string(APPEND kept "${line}\n")
+      continue()
+    endif()
+    math(EXPR r "${index} % 3")
+    if(r EQUAL 0)
+      string(APPEND kept "${line}\n")
+    endif()
+    math(EXPR index "${index} + 1")
+  endforeach()
+  file(WRITE ${third}/images.txt "${kept}")
+  set(dir ${WORK}/${CASE})
+  file(REMOVE_RECURSE ${dir})
+  run("track ${CASE}" ${VKLOC} track --sequence ${third} --out ${dir}/t.txt --report ${dir}/report --keyframes sync
+      --filter ekf --quiet)
+  set(j ${dir}/report/track.json)
+  foreach(key frames lost inertial scene_depth_median_m translation_median_m translation_max_m)
+    json_number(${key} ${j} ${key})
+  endforeach()
+  message(STATUS "${CASE}: ${frames} frames, lost ${lost}, inertial only ${inertial}, translation median "
+                 "${translation_median_m} m max ${translation_max_m} m, scene depth ${scene_depth_median_m} m")
+  execute_process(
+    COMMAND awk "BEGIN { d = ${scene_depth_median_m}; bad = \"\";
+      if (${lost} != 0 || ${inertial} != 0) bad = bad \" lost ${lost}, inertial only ${inertial};\";
+      if (${translation_median_m} > 0.003 * d) bad = bad \" median ${translation_median_m} m > 0.3 % of depth;\";
+      if (${translation_max_m} > 0.02 * d) bad = bad \" largest error ${translation_max_m} m > 2 % of depth;\";
+      print bad }"
+    OUTPUT_VARIABLE bad OUTPUT_STRIP_TRAILING_WHITESPACE)
+  if(NOT bad STREQUAL "")
+    string(APPEND failures "${bad}\n")
+  endif()
 elseif(CASE MATCHES "_no_imu$")
   set(dir ${WORK}/${CASE})
   file(REMOVE_RECURSE ${dir})

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <set>
 #include <thread>
@@ -244,13 +245,15 @@ TEST(Localizer, AFilterThatRefusesEveryPoseForLongRestartsWhateverTheScores) {
 }
 
 // Started at an unknown velocity, the first frame's plain alignment goes to the motion search
-// unless it is verified with motion_search_confident_score (that pose sets the velocity); when the
-// search finds no confident pose the plain one is kept. A confident score the box's true poses
-// cannot reach makes frame 1 search and keep its pose; the default takes it without a search.
+// unless it is verified with motion_search_start_score (that pose sets the velocity); a searched
+// pose replaces it only when verified higher. A start score the box's true poses cannot reach
+// makes frame 1 search and keep a pose verified at least as well as the plain one; the default
+// takes the plain pose without a search.
 TEST(Localizer, AnUnknownVelocityStartSearchesUnlessTheFirstPoseIsConfident) {
-  for (double confident : {LocalizerOptions{}.motion_search_confident_score, 0.999}) {
-    SCOPED_TRACE(confident);
-    auto localizer = makeEkfLocalizer([&](LocalizerOptions& o) { o.motion_search_confident_score = confident; });
+  double plain_score = 0;
+  for (double start_score : {LocalizerOptions{}.motion_search_start_score, 0.999}) {
+    SCOPED_TRACE(start_score);
+    auto localizer = makeEkfLocalizer([&](LocalizerOptions& o) { o.motion_search_start_score = start_score; });
     ASSERT_TRUE(localizer);
     localizer->reset(test::localizeTruth(0));  // no velocity
     const auto results = run(*localizer, 3, 0, true);
@@ -260,14 +263,26 @@ TEST(Localizer, AnUnknownVelocityStartSearchesUnlessTheFirstPoseIsConfident) {
       EXPECT_EQ(results[i].state, TrackingState::kTracking) << i;
       EXPECT_LT(test::translationError(results[i].T_world_camera, test::localizeTruth(i)), 3e-3) << i;
     }
-    if (confident < 0.99) {
-      EXPECT_GE(results[1].verify_score, confident);
+    if (start_score < 0.99) {
+      EXPECT_GE(results[1].verify_score, start_score);
       EXPECT_EQ(results[1].motion_search_probes, 0);
+      plain_score = results[1].verify_score;
     } else {
-      EXPECT_LT(results[1].verify_score, confident);
-      EXPECT_GT(results[1].motion_search_probes, 0);  // the search ran for a confident pose
-      EXPECT_EQ(results[2].motion_search_probes, 0);  // the second pose has pinned the velocity down
+      EXPECT_LT(results[1].verify_score, start_score);
+      EXPECT_GT(results[1].motion_search_probes, 0);           // the search ran for a confident pose
+      EXPECT_GE(results[1].verify_score, plain_score - 1e-9);  // and kept the best of it and the plain one
+      EXPECT_EQ(results[2].motion_search_probes, 0);           // the second pose has pinned the velocity down
     }
+  }
+}
+
+TEST(Localizer, AMotionSearchStartScoreOutsideZeroToOneIsRefused) {
+  for (double bad : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    LocalizerOptions options;
+    options.motion_search_start_score = bad;
+    auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
+    ASSERT_FALSE(created.ok()) << bad;
+    EXPECT_NE(created.error().message.find("motion_search_start_score"), std::string::npos);
   }
 }
 

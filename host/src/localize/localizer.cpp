@@ -56,11 +56,12 @@ Status validateOptions(const LocalizerOptions& o) {
   }
   if (o.motion_search_steps < 0 || o.motion_search_steps > 10 || o.motion_search_candidates < 1 ||
       o.motion_search_candidates > 50 || !finiteIn(o.motion_search_max_gap_s, 0.0, 10.0) ||
-      !finiteIn(o.motion_search_min_response, 0.0, 1.0) || !finiteIn(o.motion_search_confident_score, 0.0, 1.0)) {
+      !finiteIn(o.motion_search_min_response, 0.0, 1.0) || !finiteIn(o.motion_search_confident_score, 0.0, 1.0) ||
+      !finiteIn(o.motion_search_start_score, 0.0, 1.0)) {
     return makeError(ErrorCode::kInvalidArgument,
                      "Localizer: need motion_search_steps in 0..10, motion_search_candidates in 1..50, "
-                     "motion_search_max_gap_s in 0..10, motion_search_min_response and "
-                     "motion_search_confident_score in 0..1");
+                     "motion_search_max_gap_s in 0..10, motion_search_min_response, "
+                     "motion_search_confident_score and motion_search_start_score in 0..1");
   }
   if (o.restart_after_refusals < 0 || !finiteIn(o.restart_min_score, 0.0, 1.0) ||
       !finiteIn(o.restart_after_refused_s, 0.0, 1e4) || !finiteIn(o.restart_sigma_velocity_m_s, 0.0, 1e3)) {
@@ -466,12 +467,14 @@ struct Localizer::Impl {
   }
 
   /// Motion search (LocalizerOptions::motion_search_steps) over `grid`: `lost` is the frame's
-  /// alignment from `guess` (lost, or refused by the motion prior's gate: `refused`); returns it
-  /// unchanged when the search finds nothing tracked, verified and not refused.
+  /// alignment from `guess` (lost, refused by the motion prior's gate: `refused`, or verified
+  /// below motion_search_start_score on the first frame after a start at an unknown velocity, at
+  /// `incumbent_score`: 0 for the others); returns it unchanged when the search finds nothing
+  /// tracked, not refused and verified above both the search's minimum and incumbent_score.
   template <typename AlignFrom, typename Refused>
   Result<TrackResult> motionSearch(const SearchGrid& grid, const MotionPrediction& prediction, const Pose& guess,
-                                   const ImageU8& gray_now, TrackResult lost, AlignFrom& alignFrom, Refused& refused,
-                                   LocalizationResult& out) {
+                                   const ImageU8& gray_now, TrackResult lost, double incumbent_score,
+                                   AlignFrom& alignFrom, Refused& refused, LocalizationResult& out) {
     const Keyframe& keyframe = *keyframes->current();
     const VerificationOptions& verification = options.verification;
     // Many starts give many chances to converge somewhere wrong: a result must be tracked, pass
@@ -485,18 +488,23 @@ struct Localizer::Impl {
     const double min_score = prediction.velocity_unobserved
                                  ? std::max(verification.min_score, options.motion_search_confident_score)
                                  : verification.min_score;
+    // While the velocity is unobserved the pose taken sets it: the search goes on past a merely
+    // confident pose (a look-alike a period along a repetitive street verifies at 0.6-0.7).
+    const double stop_score = prediction.velocity_unobserved
+                                  ? std::max(options.motion_search_confident_score, options.motion_search_start_score)
+                                  : options.motion_search_confident_score;
     std::optional<TrackResult> best;
-    double best_score = 0;
+    double best_score = incumbent_score;            // a result must beat the plain alignment's
     std::shared_ptr<const Keyframe> best_keyframe;  // the keyframe `best` was aligned against
     auto consider = [&](TrackResult r) {
       if (r.state != TrackingState::kTracking || refused(r)) return false;
       const double score =
           verificationScore(verificationFeatures(r, keyframes->current()->scene_depth_m), verification);
-      if (score < min_score || (best && score <= best_score)) return false;
+      if (score < min_score || score <= best_score) return false;
       best = std::move(r);
       best_score = score;
       best_keyframe = keyframes->current();
-      return score >= options.motion_search_confident_score;
+      return score >= stop_score;
     };
     // First the starts the image motion since the last tracked frame points at: the gyro turns
     // that frame into this view, and the shift left is the translation across the view at the
@@ -1469,26 +1477,33 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // On the first frame after a start at an unknown velocity the filter's gate admits whatever
   // that velocity's sigma reaches, and the pose it takes sets the velocity for the frames to come
   // (its error over one frame interval): a plain alignment that does not verify with
-  // motion_search_confident_score goes to the motion search, whose confidently verified pose
-  // replaces it; when the search finds none, the plain pose is kept and gated as any other
-  // (imagery whose true poses verify below the confident score still starts: refusing them there
-  // left a blurred city drone bridged at zero velocity and lost for good).
-  auto unconfirmed = [&](const TrackResult& r) {
-    return prediction && prediction->inertial && prediction->velocity_unobserved && m.untracked == 0 &&
-           verificationScore(verificationFeatures(r, m.keyframes->current()->scene_depth_m), m.options.verification) <
-               m.options.motion_search_confident_score;
+  // motion_search_start_score goes to the motion search, whose pose replaces it when verified
+  // higher; else the plain pose is kept and gated as any other (imagery whose true poses verify
+  // below that score still starts: refusing them there left a blurred city drone bridged at zero
+  // velocity and lost for good).
+  const auto scoreOf = [&](const TrackResult& r) {
+    return verificationScore(verificationFeatures(r, m.keyframes->current()->scene_depth_m), m.options.verification);
   };
-  auto refused = [&](const TrackResult& r) {
-    return r.state == TrackingState::kTracking && (!m.motion->consistent(*prediction, Impl::filterPose(r), r.covariance,
-                                                                         m.keyframes->current()->scene_depth_m) ||
-                                                   unconfirmed(r));
+  auto gated = [&](const TrackResult& r) {
+    return r.state == TrackingState::kTracking &&
+           !m.motion->consistent(*prediction, Impl::filterPose(r), r.covariance, m.keyframes->current()->scene_depth_m);
   };
+  const bool first_at_unknown_velocity =
+      prediction && prediction->inertial && prediction->velocity_unobserved && m.untracked == 0;
   // The grid first: a settled prior has none, and its frames are not tested against the gate twice.
   const std::optional<Impl::SearchGrid> grid =
       !T_world_camera_guess && prediction && prediction->inertial ? m.searchGrid(*prediction) : std::nullopt;
-  if (grid && (track.state == TrackingState::kLost || refused(track))) {
+  if (grid && track.state == TrackingState::kTracking && !gated(track) && first_at_unknown_velocity) {
+    const double plain_score = scoreOf(track);
+    if (plain_score < m.options.motion_search_start_score) {
+      Result<TrackResult> searched =
+          m.motionSearch(*grid, *prediction, guess, gray, std::move(track), plain_score, alignFrom, gated, out);
+      if (!searched.ok()) return searched.error();
+      track = std::move(searched).value();
+    }
+  } else if (grid && (track.state == TrackingState::kLost || gated(track))) {
     Result<TrackResult> searched =
-        m.motionSearch(*grid, *prediction, guess, gray, std::move(track), alignFrom, refused, out);
+        m.motionSearch(*grid, *prediction, guess, gray, std::move(track), 0.0, alignFrom, gated, out);
     if (!searched.ok()) return searched.error();
     track = std::move(searched).value();
   }
