@@ -475,7 +475,9 @@ struct Localizer::Impl {
   Result<TrackResult> motionSearch(const SearchGrid& grid, const MotionPrediction& prediction, const Pose& guess,
                                    const ImageU8& gray_now, TrackResult lost, double incumbent_score,
                                    AlignFrom& alignFrom, Refused& refused, LocalizationResult& out) {
-    const Keyframe& keyframe = *keyframes->current();
+    // Held: the shift's starts may render keyframes of their own (the guess's is made again after).
+    const std::shared_ptr<const Keyframe> guess_keyframe = keyframes->current();
+    const Keyframe& keyframe = *guess_keyframe;
     const VerificationOptions& verification = options.verification;
     // Many starts give many chances to converge somewhere wrong: a result must be tracked, pass
     // the prior's gate and the pose verification; the best verified one is kept, and the search
@@ -511,6 +513,7 @@ struct Localizer::Impl {
     // scene depth (shift = -f t / depth). Motion along the view (a zoom) does not shift the
     // image: steps along it of 1.5 basins at a quarter of the image diagonal are tried in turn.
     // The shift is good to a few pixels, so these starts align from level 1 at most.
+    bool rekeyed = false;
     if (last_tracked_gray &&
         static_cast<double>(out.t_ns - last_tracked_gray->t_ns) * 1e-9 <= options.motion_search_max_gap_s) {
       const Eigen::Matrix3d R_current_previous =
@@ -537,6 +540,15 @@ struct Localizer::Impl {
           const Eigen::Vector3d t_camera(-shift.dx_px * keyframe.scene_depth_m / camera.fx,
                                          -shift.dy_px * keyframe.scene_depth_m / camera.fy, z * step_z);
           start.translation() = last_tracked_gray->T_world_camera.translation() + guess.linear() * t_camera;
+          // A start a grid step or more from the keyframe's pose is aligned against a keyframe
+          // rendered at it, as the grid's candidates are: near surfaces show other parallax and
+          // occlusion edges from there (cycles-room at a third of its rate, start 6: a step of
+          // 0.36 m and 20 deg at 1.5 m, the image shift 119 px, did not converge against the
+          // keyframe at the previous pose).
+          if ((start.translation() - keyframe.request.T_world_ref.translation()).norm() > grid.step_m) {
+            VKLOC_TRY_STATUS(makeKeyframe(start, out.t_ns, out));
+            rekeyed = true;
+          }
           const int saved_level = search_level;
           search_level = shift_level;
           Result<TrackResult> r = alignFrom(start);
@@ -547,6 +559,8 @@ struct Localizer::Impl {
         }
       }
     }
+    // The grid's probes align against the guess's keyframe.
+    if (rekeyed) VKLOC_TRY_STATUS(makeKeyframe(keyframe.request.T_world_ref, out.t_ns, out));
     // Probes: a few Gauss-Newton steps on the deepest level alone, scored by their inliers there.
     VKLOC_TRY_STATUS(ensureLive(*active, gray_now, out, live_levels, liveLevelsFor(grid.level)));
     const EdgeTrackerOptions probe = probeOptions(grid.level, 5);
