@@ -247,7 +247,8 @@ struct LocalizerOptions {
   double motion_search_max_gap_s = 0.25;
   double motion_search_min_response = 0.1;
   /// The motion search keeps the best verified result of its starts and stops at one whose
-  /// verification score reaches this (true poses of the development sequences score 0.5-1).
+  /// verification score reaches this (true poses of the development sequences score 0.5-1);
+  /// while the prior's velocity is unobserved, at motion_search_start_score if higher.
   double motion_search_confident_score = 0.5;
   /// The first frame after an inertial start at an unknown velocity sets the filter's velocity
   /// for the frames to come, and the plain alignment starts from the pose of the frame before (no
