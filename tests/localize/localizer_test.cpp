@@ -259,11 +259,12 @@ TEST(Localizer, AnUnknownVelocityStartSearchesUnlessTheFirstPoseIsConfident) {
     const auto results = run(*localizer, 3, 0, true);
     ASSERT_EQ(results.size(), 3u);
     EXPECT_EQ(results[0].state, TrackingState::kTracking);  // the start pose starts the filter
-    // Within 0.2 % of the ~2.3 m depth: the searched pose was aligned against a keyframe rendered
-    // at its start, whose edges differ from the plain alignment's by a few pixels' sampling.
+    // A searched pose within 0.2 % of the ~2.3 m depth (it was aligned against a keyframe rendered
+    // at its start, whose edges differ from the plain alignment's by a few pixels' sampling).
+    const double tolerance_m = start_score < 0.99 ? 3e-3 : 5e-3;
     for (int i = 1; i < 3; ++i) {
       EXPECT_EQ(results[i].state, TrackingState::kTracking) << i;
-      EXPECT_LT(test::translationError(results[i].T_world_camera, test::localizeTruth(i)), 5e-3) << i;
+      EXPECT_LT(test::translationError(results[i].T_world_camera, test::localizeTruth(i)), tolerance_m) << i;
     }
     if (start_score < 0.99) {
       EXPECT_GE(results[1].verify_score, start_score);

@@ -324,6 +324,13 @@ struct Localizer::Impl {
     return Status::success();
   }
 
+  /// Makes an earlier keyframe current again (and the backends' keyframe), unless it is.
+  Status restoreKeyframe(const std::shared_ptr<const Keyframe>& keyframe) {
+    if (keyframes->current() == keyframe) return Status::success();
+    keyframes->restore(keyframe);
+    return uploadKeyframe();
+  }
+
   /// Makes a keyframe at T_world_ref for this frame and waits for it.
   Status makeKeyframe(const Pose& T_world_ref, int64_t t_ns, LocalizationResult& out) {
     KeyframeRequest request;
@@ -481,7 +488,7 @@ struct Localizer::Impl {
     const VerificationOptions& verification = options.verification;
     // Many starts give many chances to converge somewhere wrong: a result must be tracked, pass
     // the prior's gate and the pose verification; the best verified one is kept, and the search
-    // stops early at one verified with motion_search_confident_score.
+    // stops early at one verified with stop_score (below).
     // A filter started at an unknown velocity has a gate that admits whatever its velocity's sigma
     // reaches, and the first pose after the start sets that velocity for the frames to come (a
     // start that converged only part of the way, on a near wall beside a far facade, would carry
@@ -513,7 +520,6 @@ struct Localizer::Impl {
     // scene depth (shift = -f t / depth). Motion along the view (a zoom) does not shift the
     // image: steps along it of 1.5 basins at a quarter of the image diagonal are tried in turn.
     // The shift is good to a few pixels, so these starts align from level 1 at most.
-    bool rekeyed = false;
     if (last_tracked_gray &&
         static_cast<double>(out.t_ns - last_tracked_gray->t_ns) * 1e-9 <= options.motion_search_max_gap_s) {
       const Eigen::Matrix3d R_current_previous =
@@ -540,14 +546,18 @@ struct Localizer::Impl {
           const Eigen::Vector3d t_camera(-shift.dx_px * keyframe.scene_depth_m / camera.fx,
                                          -shift.dy_px * keyframe.scene_depth_m / camera.fy, z * step_z);
           start.translation() = last_tracked_gray->T_world_camera.translation() + guess.linear() * t_camera;
-          // A start a grid step or more from the keyframe's pose is aligned against a keyframe
-          // rendered at it, as the grid's candidates are: near surfaces show other parallax and
-          // occlusion edges from there (cycles-room at a third of its rate, start 6: a step of
-          // 0.36 m and 20 deg at 1.5 m, the image shift 119 px, did not converge against the
-          // keyframe at the previous pose).
-          if ((start.translation() - keyframe.request.T_world_ref.translation()).norm() > grid.step_m) {
+          // A start more than a grid step from the guess's keyframe is aligned against a
+          // keyframe rendered at it (or an earlier start's within a step of it), as the grid's
+          // candidates are: near surfaces show other parallax and occlusion edges from there
+          // (cycles-room at a third of its rate, start 6: a step of 0.36 m and 20 deg at 1.5 m,
+          // the image shift 119 px, did not converge against the keyframe at the previous pose).
+          const auto beyondStep = [&](const Keyframe& from) {
+            return (start.translation() - from.request.T_world_ref.translation()).norm() > grid.step_m;
+          };
+          if (!beyondStep(keyframe)) {
+            VKLOC_TRY_STATUS(restoreKeyframe(guess_keyframe));
+          } else if (beyondStep(*keyframes->current())) {
             VKLOC_TRY_STATUS(makeKeyframe(start, out.t_ns, out));
-            rekeyed = true;
           }
           const int saved_level = search_level;
           search_level = shift_level;
@@ -560,7 +570,7 @@ struct Localizer::Impl {
       }
     }
     // The grid's probes align against the guess's keyframe.
-    if (rekeyed) VKLOC_TRY_STATUS(makeKeyframe(keyframe.request.T_world_ref, out.t_ns, out));
+    VKLOC_TRY_STATUS(restoreKeyframe(guess_keyframe));
     // Probes: a few Gauss-Newton steps on the deepest level alone, scored by their inliers there.
     VKLOC_TRY_STATUS(ensureLive(*active, gray_now, out, live_levels, liveLevelsFor(grid.level)));
     const EdgeTrackerOptions probe = probeOptions(grid.level, 5);
@@ -618,7 +628,12 @@ struct Localizer::Impl {
       }
       return std::move(*best);
     }
-    if (!distinct.empty()) VKLOC_TRY_STATUS(makeKeyframe(guess, out.t_ns, out));
+    // A plain pose kept (incumbent_score) goes on with the keyframe it was aligned against.
+    if (incumbent_score > 0) {
+      VKLOC_TRY_STATUS(restoreKeyframe(guess_keyframe));
+    } else if (!distinct.empty()) {
+      VKLOC_TRY_STATUS(makeKeyframe(guess, out.t_ns, out));
+    }
     return lost;
   }
 

@@ -243,7 +243,8 @@ struct LocalizerOptions {
   /// Before the grid, the motion search aligns from the start the image shift since the last
   /// tracked frame points at (track/image_motion.hpp), when that frame is at most
   /// motion_search_max_gap_s old and the shift's phase correlation response is at least
-  /// motion_search_min_response.
+  /// motion_search_min_response; a start more than a grid step from the current keyframe's pose
+  /// is aligned against a keyframe rendered at it.
   double motion_search_max_gap_s = 0.25;
   double motion_search_min_response = 0.1;
   /// The motion search keeps the best verified result of its starts and stops at one whose
@@ -258,7 +259,8 @@ struct LocalizerOptions {
   /// truth at 0.68, the truth 0.81, and the filter then flew backwards at 15 m/s). Such a frame
   /// goes to the motion search unless its plain alignment verifies with this score; the search
   /// keeps the best verified of its poses and the plain one, and stops early only at this score
-  /// while the velocity is unobserved (0..1; at most motion_search_confident_score: the old rule).
+  /// while the velocity is unobserved (0..1; a value at or below motion_search_confident_score
+  /// gives the rule before this option: search below the confident score, stop at it).
   double motion_search_start_score = 0.8;
   /// Restart of the motion prior: after this many poses in a row (at most motion_search_max_gap_s
   /// apart) that the prior's gate refused although their verification score was at least
