@@ -482,7 +482,7 @@ struct Localizer::Impl {
   Result<TrackResult> motionSearch(const SearchGrid& grid, const MotionPrediction& prediction, const Pose& guess,
                                    const ImageU8& gray_now, TrackResult lost, double incumbent_score,
                                    AlignFrom& alignFrom, Refused& refused, LocalizationResult& out) {
-    // Held: the shift's starts may render keyframes of their own (the guess's is made again after).
+    // Held: the shift's starts may make keyframes of their own current (the guess's is restored).
     const std::shared_ptr<const Keyframe> guess_keyframe = keyframes->current();
     const Keyframe& keyframe = *guess_keyframe;
     const VerificationOptions& verification = options.verification;
@@ -1522,17 +1522,20 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // The grid first: a settled prior has none, and its frames are not tested against the gate twice.
   const std::optional<Impl::SearchGrid> grid =
       !T_world_camera_guess && prediction && prediction->inertial ? m.searchGrid(*prediction) : std::nullopt;
-  if (grid && track.state == TrackingState::kTracking && !gated(track) && first_at_unknown_velocity) {
-    const double plain_score = scoreOf(track);
-    if (plain_score < m.options.motion_search_start_score) {
-      Result<TrackResult> searched =
-          m.motionSearch(*grid, *prediction, guess, gray, std::move(track), plain_score, alignFrom, gated, out);
-      if (!searched.ok()) return searched.error();
-      track = std::move(searched).value();
+  // The score a searched pose must beat, when the search runs: the plain pose's, or 0 for a frame
+  // lost or refused by the gate.
+  std::optional<double> incumbent_score;
+  if (grid) {
+    if (track.state == TrackingState::kLost || gated(track)) {
+      incumbent_score = 0.0;
+    } else if (first_at_unknown_velocity) {
+      const double plain_score = scoreOf(track);
+      if (plain_score < m.options.motion_search_start_score) incumbent_score = plain_score;
     }
-  } else if (grid && (track.state == TrackingState::kLost || gated(track))) {
+  }
+  if (incumbent_score) {
     Result<TrackResult> searched =
-        m.motionSearch(*grid, *prediction, guess, gray, std::move(track), 0.0, alignFrom, gated, out);
+        m.motionSearch(*grid, *prediction, guess, gray, std::move(track), *incumbent_score, alignFrom, gated, out);
     if (!searched.ok()) return searched.error();
     track = std::move(searched).value();
   }
