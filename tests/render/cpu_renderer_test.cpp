@@ -6,9 +6,12 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "support/analytic_scenes.hpp"
 #include "vkloc/render/renderer.hpp"
+#include "vkloc/sim/demo_models.hpp"
 
 namespace vkloc {
 namespace {
@@ -786,6 +789,45 @@ TEST(ReferenceRender, InvalidInputsReturnErrors) {
   Model bad = s.model;
   bad.indices[4] = 1000;
   expectInvalid(bad, s.cam, s.T, {});
+  for (int threads : {0, 65}) {
+    settings = RenderSettings{};
+    settings.threads = threads;
+    expectInvalid(s.model, s.cam, s.T, settings);
+  }
+}
+
+TEST(ReferenceRender, BandsOfRowsOnSeveralThreadsGiveTheOneThreadOutput) {
+  // The textured demos (mip-mapped textures, vertex colours, blocks), an odd height so that the
+  // last band is short, bands that split 2 x 2 quads' rows nowhere.
+  for (const std::string name : {"room", "city"}) {
+    DemoModelOptions options;
+    options.texture_size = 128;
+    const Model model = makeDemoModel(name, options).value();
+    PinholeCamera cam;
+    cam.width = 161;
+    cam.height = 205;
+    cam.fx = cam.fy = 120;
+    cam.cx = 80;
+    cam.cy = 102;
+    const std::vector<Pose> views = demoViewpoints(name);
+    ASSERT_FALSE(views.empty());
+    for (const Pose& T : views) {
+      RenderSettings one;
+      const RenderOutput expected = renderOk(model, cam, T, one);
+      ASSERT_GT(expected.triangles_drawn, 0u);
+      for (int threads : {2, 3, 64}) {
+        RenderSettings several;
+        several.threads = threads;
+        const RenderOutput out = renderOk(model, cam, T, several);
+        EXPECT_EQ(out.rgba.data, expected.rgba.data) << name << ", " << threads << " threads";
+        EXPECT_EQ(out.depth.data, expected.depth.data) << name << ", " << threads << " threads";
+        EXPECT_EQ(out.normals.data, expected.normals.data) << name << ", " << threads << " threads";
+        EXPECT_EQ(out.gray.data, expected.gray.data) << name << ", " << threads << " threads";
+        EXPECT_EQ(out.blocks_drawn, expected.blocks_drawn);
+        EXPECT_EQ(out.triangles_drawn, expected.triangles_drawn);
+      }
+    }
+  }
 }
 
 TEST(ReferenceRender, EmptyModelRendersBackground) {

@@ -8,6 +8,7 @@
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <thread>
 
 #include "vkloc/core/clock.hpp"
 #include "vkloc/core/numeric.hpp"
@@ -1167,9 +1168,17 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
     if (!created.ok()) return created.error();
     renderer = std::move(created).value();
   }
+  // Keyframes made on the caller's thread use every core (the CPU rasterizer's bands, the edge
+  // levels on OpenCV's pool); the worker thread uses its own alone.
   ReferenceEdgeOptions keyframe_edges = impl->options.reference;
-  if (options.keyframe_threading == KeyframeThreading::kWorkerThread) keyframe_edges.parallel = false;
-  auto maker = std::make_unique<KeyframeMaker>(std::move(renderer), camera, impl->options.render, keyframe_edges);
+  RenderSettings keyframe_render = impl->options.render;
+  if (options.keyframe_threading == KeyframeThreading::kWorkerThread) {
+    keyframe_edges.parallel = false;
+    keyframe_render.threads = 1;
+  } else {
+    keyframe_render.threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 64u));
+  }
+  auto maker = std::make_unique<KeyframeMaker>(std::move(renderer), camera, keyframe_render, keyframe_edges);
   impl->keyframes = std::make_unique<KeyframeManager>(std::move(maker), keyframeOptions(options));
 
   bool on_device = false;

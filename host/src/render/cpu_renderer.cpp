@@ -50,6 +50,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "vkloc/render/mipmap.hpp"
@@ -236,23 +237,23 @@ class Rasterizer {
  public:
   /// `mip_levels[k]` holds levels 1.. of model.textures[k] (buildMipLevels) for every texture a
   /// material uses.
+  /// Draws rows [row_begin, row_end) of the output (row_begin even: a 2 x 2 quad stays in one
+  /// band); `p_camera` holds the model's vertices in the camera frame.
   Rasterizer(const Model& model, const std::vector<std::vector<Texture>>& mip_levels, const PinholeCamera& camera,
-             const RenderSettings& settings, const Pose& T_camera_world, RenderOutput& out)
+             const RenderSettings& settings, const std::vector<Eigen::Vector3d>& p_camera, int row_begin, int row_end,
+             RenderOutput& out)
       : model_(model),
         mip_levels_(mip_levels),
         cam_(camera),
         settings_(settings),
         out_(out),
         shade_((settings.outputs & kRenderColor) != 0),
-        winner_(shade_ ? static_cast<size_t>(camera.width) * camera.height : 0, -1),
-        depth_(static_cast<size_t>(camera.width) * camera.height, std::numeric_limits<double>::infinity()) {
-    const size_t nv = model.vertexCount();
-    p_camera_.resize(nv);
-    for (size_t i = 0; i < nv; ++i) {
-      const Eigen::Vector3d p(model.positions[3 * i], model.positions[3 * i + 1], model.positions[3 * i + 2]);
-      p_camera_[i] = T_camera_world * p;
-    }
-  }
+        row_begin_(row_begin),
+        row_end_(row_end),
+        band_offset_(static_cast<size_t>(row_begin) * camera.width),
+        winner_(shade_ ? static_cast<size_t>(camera.width) * (row_end - row_begin) : 0, -1),
+        p_camera_(p_camera),
+        depth_(static_cast<size_t>(camera.width) * (row_end - row_begin), std::numeric_limits<double>::infinity()) {}
 
   /// Draws triangles [first, first + count) of the index buffer with one material.
   void drawRange(uint32_t first_index, uint32_t index_count, const Material& material) {
@@ -273,7 +274,7 @@ class Rasterizer {
   void finish() {
     if (shade_) shadeWinners();
     for (size_t i = 0; i < depth_.size(); ++i) {
-      out_.depth.data[i] = std::isfinite(depth_[i]) ? static_cast<float>(depth_[i]) : kBackgroundDepth;
+      out_.depth.data[band_offset_ + i] = std::isfinite(depth_[i]) ? static_cast<float>(depth_[i]) : kBackgroundDepth;
     }
   }
 
@@ -390,8 +391,8 @@ class Rasterizer {
     const double v_max = std::max({s[0].v, s[1].v, s[2].v});
     const double i_lo = std::max(0.0, std::ceil(u_min));
     const double i_hi = std::min(static_cast<double>(cam_.width - 1), std::floor(u_max));
-    const double j_lo = std::max(0.0, std::ceil(v_min));
-    const double j_hi = std::min(static_cast<double>(cam_.height - 1), std::floor(v_max));
+    const double j_lo = std::max(static_cast<double>(row_begin_), std::ceil(v_min));
+    const double j_hi = std::min(static_cast<double>(row_end_ - 1), std::floor(v_max));
     if (i_lo > i_hi || j_lo > j_hi) return;
 
     const double nx = plane_n.x();
@@ -415,9 +416,10 @@ class Rasterizer {
         const double ray_x = (u - cam_.cx) / cam_.fx;
         const double z = plane_d / (nx * ray_x + ny * ray_y + nz);
         if (!(z > 0) || z > settings_.far_m) continue;
-        const size_t idx = static_cast<size_t>(j) * w + i;
-        if (!(z < depth_[idx])) continue;
-        depth_[idx] = z;
+        const size_t idx = static_cast<size_t>(j) * w + i;  // in the output
+        const size_t band_idx = idx - band_offset_;         // in this band's buffers
+        if (!(z < depth_[band_idx])) continue;
+        depth_[band_idx] = z;
         if (!out_.normals.empty()) {
           for (int ch = 0; ch < 3; ++ch) out_.normals.data[idx * 3 + ch] = normal[ch];
         }
@@ -432,7 +434,7 @@ class Rasterizer {
                                       tex,
                                       base});
         }
-        winner_[idx] = id;
+        winner_[band_idx] = id;
       }
     }
   }
@@ -446,12 +448,13 @@ class Rasterizer {
     // the same triangle (quad_winner: that triangle's Shading, -1 none yet), per row pair.
     std::vector<int32_t> quad_winner(static_cast<size_t>(w / 2 + 1));
     std::vector<double> quad_lambda(quad_winner.size());
-    for (int j = 0; j < cam_.height; ++j) {
+    for (int j = row_begin_; j < row_end_; ++j) {
       if ((j & 1) == 0) std::fill(quad_winner.begin(), quad_winner.end(), -1);
       for (int i = 0; i < w; ++i) {
         const size_t idx = static_cast<size_t>(j) * w + i;
-        if (winner_[idx] < 0) continue;
-        const Shading& sh = shadings_[static_cast<size_t>(winner_[idx])];
+        const int32_t winner = winner_[idx - band_offset_];
+        if (winner < 0) continue;
+        const Shading& sh = shadings_[static_cast<size_t>(winner)];
         const double u = i, v = j;
         double e[3];
         for (int k = 0; k < 3; ++k) e[k] = sh.edge[k].eval(u, v);
@@ -471,7 +474,7 @@ class Rasterizer {
         if (sh.tex.base != nullptr) {
           // Level of detail of the pixel's 2 x 2 quad (file comment).
           const size_t quad = static_cast<size_t>(i / 2);
-          if (quad_winner[quad] != winner_[idx]) {
+          if (quad_winner[quad] != winner) {
             const double x0 = i & ~1, y0 = j & ~1;
             double st00[2], st10[2], st01[2];
             double rho = 0;
@@ -480,7 +483,7 @@ class Rasterizer {
               const double dy0 = st01[0] - st00[0], dy1 = st01[1] - st00[1];
               rho = std::max(std::hypot(dx0, dx1), std::hypot(dy0, dy1));
             }
-            quad_winner[quad] = winner_[idx];
+            quad_winner[quad] = winner;
             quad_lambda[quad] = rho > 0 && std::isfinite(rho) ? std::log2(rho) : 0.0;
           }
           sampleTrilinearRepeat(*sh.tex.base, *sh.tex.levels, attr[0], attr[1], quad_lambda[quad], tex_rgb);
@@ -500,11 +503,13 @@ class Rasterizer {
   const PinholeCamera& cam_;
   const RenderSettings& settings_;
   RenderOutput& out_;
-  const bool shade_;                       ///< Colour asked for (RenderSettings::outputs).
-  std::vector<Shading> shadings_;          ///< Of the triangles some pixel showed.
-  std::vector<int32_t> winner_;            ///< Per pixel: its Shading, -1 where none (empty: no shading).
-  std::vector<Eigen::Vector3d> p_camera_;  ///< Vertices in the camera frame.
-  std::vector<double> depth_;              ///< Camera z per pixel, +inf where empty.
+  const bool shade_;                              ///< Colour asked for (RenderSettings::outputs).
+  const int row_begin_, row_end_;                 ///< The band of output rows drawn.
+  const size_t band_offset_;                      ///< Output index of the band's first pixel.
+  std::vector<Shading> shadings_;                 ///< Of the triangles some pixel of the band showed.
+  std::vector<int32_t> winner_;                   ///< Per band pixel: its Shading, -1 where none (empty: no shading).
+  const std::vector<Eigen::Vector3d>& p_camera_;  ///< Vertices in the camera frame.
+  std::vector<double> depth_;                     ///< Camera z per band pixel, +inf where empty.
 };
 
 /// Mip levels 1.. of every texture a material uses (consistent ones: see checkModel); empty for
@@ -548,44 +553,61 @@ Result<RenderOutput> renderWithMipLevels(const Model& model, const std::vector<s
   if (settings.outputs & kRenderNormals) out.normals = ImageF32(w, h, 3, 0.0f);
 
   const Pose T_camera_world = T_world_camera.inverse(Eigen::Isometry);
-  Rasterizer raster(model, mip_levels, camera, settings, T_camera_world, out);
+  std::vector<Eigen::Vector3d> p_camera(model.vertexCount());
+  for (size_t i = 0; i < p_camera.size(); ++i) {
+    p_camera[i] = T_camera_world *
+                  Eigen::Vector3d(model.positions[3 * i], model.positions[3 * i + 1], model.positions[3 * i + 2]);
+  }
   const Material default_material;
   auto materialOf = [&](int index) -> const Material& {
     return model.materials.empty() ? default_material : model.materials[index];
   };
-  auto drawRanges = [&](uint32_t first_range, uint32_t range_count) {
-    for (uint32_t r = first_range; r < first_range + range_count; ++r) {
-      const DrawRange& dr = model.ranges[r];
-      out.triangles_drawn += dr.index_count / 3;
-      raster.drawRange(dr.first_index, dr.index_count, materialOf(dr.material));
+  // Every band draws the whole scene into its own rows: a pixel sees the triangles in the same
+  // order whatever the bands, so the output does not depend on their number.
+  auto drawBand = [&](int row_begin, int row_end, bool count) {
+    Rasterizer raster(model, mip_levels, camera, settings, p_camera, row_begin, row_end, out);
+    auto drawRanges = [&](uint32_t first_range, uint32_t range_count) {
+      for (uint32_t r = first_range; r < first_range + range_count; ++r) {
+        const DrawRange& dr = model.ranges[r];
+        if (count) out.triangles_drawn += dr.index_count / 3;
+        raster.drawRange(dr.first_index, dr.index_count, materialOf(dr.material));
+      }
+    };
+    if (!model.blocks.empty()) {
+      for (const Block& block : model.blocks) {
+        if (!aabbInFrustumFromCamera(block.bounds, camera, T_camera_world, settings.near_m, settings.far_m)) {
+          continue;
+        }
+        if (count) ++out.blocks_drawn;
+        drawRanges(block.first_range, block.range_count);
+      }
+    } else if (!model.indices.empty()) {
+      // A model without blocks (e.g. built by hand) is drawn as one block over all its ranges,
+      // or over all its triangles with the first material when it has no ranges either.
+      Aabb bounds;
+      for (size_t i = 0; i < model.vertexCount(); ++i) bounds.extend(&model.positions[3 * i]);
+      if (aabbInFrustum(bounds, camera, T_world_camera, settings.near_m, settings.far_m)) {
+        if (count) ++out.blocks_drawn;
+        if (!model.ranges.empty()) {
+          drawRanges(0, static_cast<uint32_t>(model.ranges.size()));
+        } else {
+          const auto n = static_cast<uint32_t>(model.indices.size());
+          if (count) out.triangles_drawn += n / 3;
+          raster.drawRange(0, n, materialOf(0));
+        }
+      }
     }
+    raster.finish();
   };
-
-  if (!model.blocks.empty()) {
-    for (const Block& block : model.blocks) {
-      if (!aabbInFrustumFromCamera(block.bounds, camera, T_camera_world, settings.near_m, settings.far_m)) {
-        continue;
-      }
-      ++out.blocks_drawn;
-      drawRanges(block.first_range, block.range_count);
-    }
-  } else if (!model.indices.empty()) {
-    // A model without blocks (e.g. built by hand) is drawn as one block over all its ranges,
-    // or over all its triangles with the first material when it has no ranges either.
-    Aabb bounds;
-    for (size_t i = 0; i < model.vertexCount(); ++i) bounds.extend(&model.positions[3 * i]);
-    if (aabbInFrustum(bounds, camera, T_world_camera, settings.near_m, settings.far_m)) {
-      ++out.blocks_drawn;
-      if (!model.ranges.empty()) {
-        drawRanges(0, static_cast<uint32_t>(model.ranges.size()));
-      } else {
-        const auto n = static_cast<uint32_t>(model.indices.size());
-        out.triangles_drawn += n / 3;
-        raster.drawRange(0, n, materialOf(0));
-      }
-    }
+  // Bands of an even number of rows (a 2 x 2 quad stays in one), at least 32 rows each.
+  const int bands = std::max(1, std::min(settings.threads, h / 32));
+  const int band_rows = ((h + bands - 1) / bands + 1) & ~1;
+  std::vector<std::thread> workers;
+  for (int b = 1; b < bands && b * band_rows < h; ++b) {
+    workers.emplace_back(drawBand, b * band_rows, std::min(h, (b + 1) * band_rows), false);
   }
-  raster.finish();
+  drawBand(0, std::min(h, band_rows), true);
+  for (std::thread& worker : workers) worker.join();
   out.gray = rgbaToGray(out.rgba);
   return out;
 }

@@ -20,6 +20,9 @@ Status validateRenderSettings(const RenderSettings& s) {
     return makeError(ErrorCode::kInvalidArgument,
                      fmt::format("render: lod_pixel_error = {} must be finite and >= 0", s.lod_pixel_error));
   }
+  if (s.threads < 1 || s.threads > 64) {
+    return makeError(ErrorCode::kInvalidArgument, fmt::format("render: threads = {} must be in 1..64", s.threads));
+  }
   return Status::success();
 }
 

@@ -181,8 +181,9 @@ struct LocalizerOptions {
   /// other work keeps busy the worker may get no time at all and keyframes age (README,
   /// "Performance"). Waiting keyframes (start, loss) are made on the caller's thread either way.
   bool keyframe_worker_background = false;
-  /// Near/far clip planes (metres) and back-face culling of keyframe renders; `outputs` is set
-  /// by the Localizer (colour, depth and normals are always rendered).
+  /// Near/far clip planes (metres) and back-face culling of keyframe renders; `outputs` and
+  /// `threads` are set by the Localizer (colour, depth and normals are always rendered; the CPU
+  /// rasterizer uses every core for keyframes made synchronously, one thread on the worker).
   RenderSettings render;
   LiveFrameOptions live;                                ///< Live-image pyramid, edges and distance fields.
   ReferenceEdgeOptions reference;                       ///< Keyframe edge points (levels are set to live.levels).

@@ -37,6 +37,9 @@ struct RenderSettings {
   /// projected from the nearest point of the block's bounds). 0 always draws full detail. The
   /// CPU reference ignores it.
   double lod_pixel_error = 0.0;
+  /// CPU reference: threads that each draw a band of rows (1..64; bands of at least 32 rows).
+  /// The output is the same for any count. GPU renderers ignore it.
+  int threads = 1;
 };
 
 /// Depth value of pixels where no surface is seen (metres).
@@ -57,7 +60,7 @@ struct RenderOutput {
 };
 
 /// Checks 1e-6 <= near < far, far finite, far / near <= 1e9 (float reverse-Z precision) and
-/// lod_pixel_error finite and >= 0. kInvalidArgument naming the field otherwise.
+/// lod_pixel_error finite and >= 0, threads in 1..64. kInvalidArgument naming the field otherwise.
 Status validateRenderSettings(const RenderSettings& settings);
 
 /// Column-major 4x4 clip transform for a pinhole camera in Vulkan's conventions, reverse-Z:
