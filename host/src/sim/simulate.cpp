@@ -4,12 +4,14 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <thread>
 
 #include "vkloc/core/atomic_file.hpp"
 #include "vkloc/core/random.hpp"
@@ -369,6 +371,8 @@ Result<SimulationReport> simulateSequence(const Model& model, const SimulationOp
   RenderSettings settings;
   settings.near_m = options.near_m;
   settings.far_m = options.far_m;
+  // Frames are made one after another: the CPU rasterizer draws each with one band per core.
+  settings.threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 64u));
   // A lens other than the ideal pinhole: its image is resampled from pinhole renders.
   std::optional<LensRig> rig;
   if (Result<LensCamera> lens = lensCamera(options.camera); lens.ok() && !lens->isIdealPinhole()) {
