@@ -414,12 +414,18 @@ void runKeyframeBench(const KeyframeBenchArgs& a) {
   RenderSettings settings = defaults.render;
   settings.outputs = kRenderAll;
   const int warmup = 3;  // shader JIT, caches, thread pool start
-  std::vector<double> render_ms, serial_ms, parallel_ms;
+  // The CPU rasterizer on one thread (the worker mode's keyframe thread) and with a band of rows
+  // per core (the synchronous mode); a GPU renderer ignores the count.
+  const int cores = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 64u));
+  std::vector<double> render_ms, render_cores_ms, serial_ms, parallel_ms;
   RenderOutput view;
   for (int i = -warmup; i < a.runs; ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
-    view = take(renderer->render(camera, T_world_camera, settings));
-    if (i >= 0) render_ms.push_back(msSince(t0));
+    for (const int threads : {1, cores}) {
+      settings.threads = threads;
+      const auto t0 = std::chrono::steady_clock::now();
+      view = take(renderer->render(camera, T_world_camera, settings));
+      if (i >= 0) (threads == 1 ? render_ms : render_cores_ms).push_back(msSince(t0));
+    }
   }
   size_t points = 0, coarse = 0;
   for (int i = -warmup; i < a.runs; ++i) {
@@ -445,6 +451,7 @@ void runKeyframeBench(const KeyframeBenchArgs& a) {
     std::printf("  %-34s %7.3f ms (p10 %.3f, p90 %.3f)\n", what, st.median, st.p10, st.p90);
   };
   line("render (colour, depth, normals)", render_ms);
+  if (a.no_vulkan) line(fmt::format("the same, {} threads (sync)", cores).c_str(), render_cores_ms);
   line("edge points, one thread (worker)", serial_ms);
   line("edge points, thread pool (sync)", parallel_ms);
   std::printf("  %zu edge points at level 0, %zu at the coarser levels\n", points, coarse);
