@@ -137,8 +137,11 @@ void run(const TrackArgs& a) {
   if (a.start_frame >= seq.images.size()) {
     throw Failure{fmt::format("--start-frame {}: the sequence has {} images", a.start_frame, seq.images.size())};
   }
-  // A global initialization needs no start pose (the search finds it).
-  const Pose T_init = a.global_init ? Pose::Identity() : initialPose(seq, a.init_offset, a.start_frame);
+  // A global initialization needs no start pose (the search finds it); a sequence without one
+  // starts that way when a database is given.
+  const bool no_start_pose = !a.global_init && !a.db.empty() && !hasInitialPose(seq, a.start_frame);
+  const bool global_init = a.global_init || no_start_pose;
+  const Pose T_init = global_init ? Pose::Identity() : initialPose(seq, a.init_offset, a.start_frame);
   // The velocity at the start is the sequence's own only when it starts at its first image.
   const std::optional<Eigen::Vector3d> v_init =
       a.start_frame == 0 ? seq.initial_velocity_world : std::optional<Eigen::Vector3d>{};
@@ -172,7 +175,7 @@ void run(const TrackArgs& a) {
     check(localizer->setKeyframeDatabase(db));
     search_line = fmt::format("keyframe database: {} keyframes ({})", db->size(), a.db);
   }
-  if (a.global_init) {
+  if (global_init) {
     if (a.db.empty()) throw Failure{"--global-init needs --db (vkloc keyframes build)"};
     // The region of a GPS-like prior at the first image (prior.csv, or simulated from the ground
     // truth with --prior-sigma); else the whole database.
@@ -196,6 +199,7 @@ void run(const TrackArgs& a) {
         region ? fmt::format("; global initialization within {:.1f} m of ({:.2f}, {:.2f}, {:.2f})", region->radius_m,
                              region->center_world.x(), region->center_world.y(), region->center_world.z())
                : "; global initialization over the whole database";
+    if (no_start_pose) search_line += " (the sequence gives no start pose)";
   }
   const auto overlay = TrackOverlay::create(a.overlay, model, camera, options, seq.groundtruth);
   const double setup_ms = msSince(t_start);

@@ -314,6 +314,18 @@ Model loadSequenceModel(const Sequence& seq) {
   return m;
 }
 
+bool hasInitialPose(const Sequence& seq, size_t start_frame) {
+  if (start_frame > 0) {
+    if (start_frame >= seq.images.size()) return false;
+    const int64_t t = seq.images[start_frame].t_ns;
+    return std::any_of(seq.groundtruth.begin(), seq.groundtruth.end(),
+                       [&](const auto& g) { return std::llabs(g.t_ns - t) <= 1000000; });
+  }
+  return seq.initial_T_world_camera.has_value() ||
+         (!seq.groundtruth.empty() && !seq.images.empty() &&
+          std::llabs(seq.groundtruth.front().t_ns - seq.images.front().t_ns) < 10000000);
+}
+
 Pose initialPose(const Sequence& seq, const std::string& offset, size_t start_frame) {
   Pose T;
   if (start_frame > 0) {
@@ -332,8 +344,10 @@ Pose initialPose(const Sequence& seq, const std::string& offset, size_t start_fr
              std::llabs(seq.groundtruth.front().t_ns - seq.images.front().t_ns) < 10000000) {
     T = seq.groundtruth.front().T_world_camera;
   } else {
-    throw Failure{fmt::format("{}: no initial_T_world_camera in sequence.yaml and no ground truth at the first image",
-                              seq.directory)};
+    throw Failure{
+        fmt::format("{}: no initial_T_world_camera in sequence.yaml and no ground truth at the first image; "
+                    "give one, or pass --db DB (vkloc keyframes build) to search for the first pose",
+                    seq.directory)};
   }
   if (!offset.empty()) {
     const auto v = take(parseNumbers(offset, "--init-offset (dx,dy,dz metres, rx,ry,rz degrees)", 6));

@@ -38,6 +38,39 @@ if(median GREATER 0.05)
   message(FATAL_ERROR "global initialization tracked with a median error of ${median} m")
 endif()
 
+# A sequence that gives no start pose (no initial_T_world_camera, no ground truth): with --db
+# alone the first pose is searched for over the whole database; without it, one line says what
+# to give.
+set(nopose ${WORK}/nopose)
+file(MAKE_DIRECTORY ${nopose})
+foreach(item camera.yaml images.txt imu.csv images)
+  file(COPY ${seq}/${item} DESTINATION ${nopose})
+endforeach()
+file(GLOB model_files ${seq}/*.glb ${seq}/*.obj ${seq}/*.mtl ${seq}/*.drc ${seq}/*.png)
+file(COPY ${model_files} DESTINATION ${nopose})
+file(STRINGS ${seq}/sequence.yaml yaml_lines)
+set(yaml "")
+foreach(line IN LISTS yaml_lines)
+  if(NOT line MATCHES "^initial_T_world_camera")
+    string(APPEND yaml "${line}\n")
+  endif()
+endforeach()
+file(WRITE ${nopose}/sequence.yaml "${yaml}")
+run_fails("no start pose, no database" "no initial_T_world_camera.*pass --db" track --sequence ${nopose}
+          --out ${WORK}/x/traj.txt --backend cpu)
+run_ok("track with no start pose" track --sequence ${nopose} --out ${WORK}/np/traj.txt --db ${db} --backend cpu
+       --keyframes sync)
+if(NOT out MATCHES "global initialization over the whole database \\(the sequence gives no start pose\\)"
+   OR NOT out MATCHES "[1-9][0-9]* relocalized")
+  message(FATAL_ERROR "track with no start pose did not search the database:\n${out}")
+endif()
+run_ok("eval of the no-start-pose run" eval --estimate ${WORK}/np/traj.txt --groundtruth ${seq}/groundtruth.txt
+       --json ${WORK}/np/eval.json)
+json_number(median ${WORK}/np/eval.json "ate;translation_m;median")
+if(median GREATER 0.05)
+  message(FATAL_ERROR "no start pose: tracked with a median error of ${median} m")
+endif()
+
 run_ok("bench reloc" bench reloc --sequence ${seq} --db ${db} --queries 3 --no-vulkan)
 if(NOT out MATCHES "ms per 1000 keyframes" OR NOT out MATCHES "recovered \\(verified"
    OR NOT out MATCHES "retrieval after the re-ranking")
