@@ -15,6 +15,7 @@
 
 #include "common.hpp"
 #include "vkloc/core/se3.hpp"
+#include "vkloc/core/threads.hpp"
 #include "vkloc/engine/gpu_accelerator.hpp"
 #include "vkloc/engine/gpu_edges.hpp"
 #include "vkloc/eval/eval.hpp"
@@ -416,11 +417,13 @@ void runKeyframeBench(const KeyframeBenchArgs& a) {
   const int warmup = 3;  // shader JIT, caches, thread pool start
   // The CPU rasterizer on one thread (the worker mode's keyframe thread) and with a band of rows
   // per core (the synchronous mode); a GPU renderer ignores the count.
-  const int cores = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 64u));
+  const int cores = availableCores();
+  std::vector<int> thread_counts{1};
+  if (a.no_vulkan && cores > 1) thread_counts.push_back(cores);
   std::vector<double> render_ms, render_cores_ms, serial_ms, parallel_ms;
   RenderOutput view;
   for (int i = -warmup; i < a.runs; ++i) {
-    for (const int threads : {1, cores}) {
+    for (const int threads : thread_counts) {
       settings.threads = threads;
       const auto t0 = std::chrono::steady_clock::now();
       view = take(renderer->render(camera, T_world_camera, settings));
@@ -451,7 +454,7 @@ void runKeyframeBench(const KeyframeBenchArgs& a) {
     std::printf("  %-34s %7.3f ms (p10 %.3f, p90 %.3f)\n", what, st.median, st.p10, st.p90);
   };
   line("render (colour, depth, normals)", render_ms);
-  if (a.no_vulkan) line(fmt::format("the same, {} threads (sync)", cores).c_str(), render_cores_ms);
+  if (!render_cores_ms.empty()) line(fmt::format("the same, {} threads (sync)", cores).c_str(), render_cores_ms);
   line("edge points, one thread (worker)", serial_ms);
   line("edge points, thread pool (sync)", parallel_ms);
   std::printf("  %zu edge points at level 0, %zu at the coarser levels\n", points, coarse);

@@ -8,10 +8,10 @@
 #include <filesystem>
 #include <memory>
 #include <set>
-#include <thread>
 
 #include "common.hpp"
 #include "vkloc/core/clock.hpp"
+#include "vkloc/core/threads.hpp"
 #include "vkloc/engine/gpu_accelerator.hpp"
 #include "vkloc/io/sequence.hpp"
 #include "vkloc/localize/keyframe_database.hpp"
@@ -121,7 +121,7 @@ void runBuild(const BuildArgs& a) {
     throw Failure{fmt::format("--renderer '{}': expected auto, cpu or vulkan", a.renderer)};
   }
   if (renderers.empty()) {
-    const int threads = a.threads > 0 ? a.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+    const int threads = a.threads > 0 ? a.threads : availableCores();
     for (int t = 0; t < threads; ++t) renderers.push_back(take(CpuRenderer::create(model)));
   }
   std::vector<Renderer*> pointers;

@@ -139,8 +139,12 @@ void run(const TrackArgs& a) {
   }
   // A global initialization needs no start pose (the search finds it); a sequence without one
   // starts that way when a database is given.
-  const bool no_start_pose = !a.global_init && !a.db.empty() && !hasInitialPose(seq, a.start_frame);
+  const bool no_start_pose = !a.global_init && !a.db.empty() && !sequenceStartPose(seq, a.start_frame);
   const bool global_init = a.global_init || no_start_pose;
+  if (global_init && !a.init_offset.empty()) {
+    throw Failure{no_start_pose ? "--init-offset: the sequence gives no start pose to move (the database is searched)"
+                                : "--init-offset moves a start pose; --global-init starts without one"};
+  }
   const Pose T_init = global_init ? Pose::Identity() : initialPose(seq, a.init_offset, a.start_frame);
   // The velocity at the start is the sequence's own only when it starts at its first image.
   const std::optional<Eigen::Vector3d> v_init =

@@ -314,41 +314,36 @@ Model loadSequenceModel(const Sequence& seq) {
   return m;
 }
 
-bool hasInitialPose(const Sequence& seq, size_t start_frame) {
+std::optional<Pose> sequenceStartPose(const Sequence& seq, size_t start_frame) {
   if (start_frame > 0) {
-    if (start_frame >= seq.images.size()) return false;
+    if (start_frame >= seq.images.size()) return std::nullopt;
     const int64_t t = seq.images[start_frame].t_ns;
-    return std::any_of(seq.groundtruth.begin(), seq.groundtruth.end(),
-                       [&](const auto& g) { return std::llabs(g.t_ns - t) <= 1000000; });
-  }
-  return seq.initial_T_world_camera.has_value() ||
-         (!seq.groundtruth.empty() && !seq.images.empty() &&
-          std::llabs(seq.groundtruth.front().t_ns - seq.images.front().t_ns) < 10000000);
-}
-
-Pose initialPose(const Sequence& seq, const std::string& offset, size_t start_frame) {
-  Pose T;
-  if (start_frame > 0) {
-    const int64_t t = seq.images.at(start_frame).t_ns;
     auto near = std::min_element(seq.groundtruth.begin(), seq.groundtruth.end(), [&](const auto& a, const auto& b) {
       return std::llabs(a.t_ns - t) < std::llabs(b.t_ns - t);
     });
-    if (near == seq.groundtruth.end() || std::llabs(near->t_ns - t) > 1000000) {
-      throw Failure{fmt::format("{}: --start-frame {}: no ground-truth pose within 1 ms of that image", seq.directory,
-                                start_frame)};
-    }
-    T = near->T_world_camera;
-  } else if (seq.initial_T_world_camera) {
-    T = *seq.initial_T_world_camera;
-  } else if (!seq.groundtruth.empty() &&
-             std::llabs(seq.groundtruth.front().t_ns - seq.images.front().t_ns) < 10000000) {
-    T = seq.groundtruth.front().T_world_camera;
-  } else {
-    throw Failure{
-        fmt::format("{}: no initial_T_world_camera in sequence.yaml and no ground truth at the first image; "
-                    "give one, or pass --db DB (vkloc keyframes build) to search for the first pose",
-                    seq.directory)};
+    if (near == seq.groundtruth.end() || std::llabs(near->t_ns - t) > 1000000) return std::nullopt;
+    return near->T_world_camera;
   }
+  if (seq.initial_T_world_camera) return *seq.initial_T_world_camera;
+  if (!seq.groundtruth.empty() && !seq.images.empty() &&
+      std::llabs(seq.groundtruth.front().t_ns - seq.images.front().t_ns) < 10000000) {
+    return seq.groundtruth.front().T_world_camera;
+  }
+  return std::nullopt;
+}
+
+Pose initialPose(const Sequence& seq, const std::string& offset, size_t start_frame) {
+  const std::optional<Pose> start = sequenceStartPose(seq, start_frame);
+  if (!start) {
+    const std::string hint = "; give one, or pass --db DB (vkloc keyframes build) to search for the first pose";
+    if (start_frame > 0) {
+      throw Failure{fmt::format("{}: --start-frame {}: no ground-truth pose within 1 ms of that image{}", seq.directory,
+                                start_frame, hint)};
+    }
+    throw Failure{fmt::format("{}: no initial_T_world_camera in sequence.yaml and no ground truth at the first image{}",
+                              seq.directory, hint)};
+  }
+  Pose T = *start;
   if (!offset.empty()) {
     const auto v = take(parseNumbers(offset, "--init-offset (dx,dy,dz metres, rx,ry,rz degrees)", 6));
     for (int k = 0; k < 6; ++k) {

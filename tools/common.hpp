@@ -127,9 +127,10 @@ PinholeCamera sequenceCamera(const Sequence& seq);
 /// start_frame > 0 the ground truth at that image), moved by `offset` = "dx,dy,dz,rx,ry,rz"
 /// (metres along world axes, degrees about camera axes; "" = none); throws Failure.
 Pose initialPose(const Sequence& seq, const std::string& offset, size_t start_frame = 0);
-/// Whether initialPose() has a pose for the image start_frame (sequence.yaml's or the ground
-/// truth's) instead of failing.
-bool hasInitialPose(const Sequence& seq, size_t start_frame = 0);
+/// The pose initialPose() starts from, before any offset: sequence.yaml's, else the ground
+/// truth's within 10 ms of the first image; with start_frame > 0 the ground truth's within 1 ms
+/// of that image. nullopt where there is none.
+std::optional<Pose> sequenceStartPose(const Sequence& seq, size_t start_frame = 0);
 /// Inertial aiding from the sequence: on when it has IMU readings and `use_imu`, with its camera
 /// mounting and gravity.
 void setSequenceInertial(const Sequence& seq, bool use_imu, LocalizerOptions& options);

@@ -289,6 +289,36 @@ TEST(Localizer, AMotionSearchStartScoreOutsideZeroToOneIsRefused) {
   }
 }
 
+TEST(Localizer, KeyframeRenderThreadsOutsideZeroTo64AreRefused) {
+  for (int bad : {-1, 65}) {
+    LocalizerOptions options;
+    options.keyframe_render_threads = bad;
+    auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
+    ASSERT_FALSE(created.ok()) << bad;
+    EXPECT_NE(created.error().message.find("keyframe_render_threads"), std::string::npos);
+  }
+}
+
+TEST(Localizer, SynchronousPosesDoNotDependOnTheKeyframeRenderThreads) {
+  // The CPU rasterizer's bands give the one-thread render byte for byte, so the synchronous
+  // mode's poses are the same bits with any number of render threads.
+  std::vector<std::vector<LocalizationResult>> runs;
+  for (int threads : {1, 3}) {
+    LocalizerOptions options;
+    options.keyframe_threading = KeyframeThreading::kSynchronous;
+    options.keyframe_render_threads = threads;
+    auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
+    ASSERT_TRUE(created.ok()) << created.error().message;
+    (*created)->reset(test::localizeTruth(0));
+    runs.push_back(run(**created, 8));
+  }
+  ASSERT_EQ(runs[0].size(), runs[1].size());
+  for (size_t i = 0; i < runs[0].size(); ++i) {
+    EXPECT_EQ(runs[0][i].state, runs[1][i].state) << "frame " << i;
+    EXPECT_TRUE(runs[0][i].T_world_camera.matrix() == runs[1][i].T_world_camera.matrix()) << "frame " << i;
+  }
+}
+
 TEST(Localizer, WorkerModeWaitsOnlyForTheFirstKeyframe) {
   auto localizer = makeLocalizer(KeyframeThreading::kWorkerThread);
   ASSERT_TRUE(localizer);

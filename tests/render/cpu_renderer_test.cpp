@@ -830,6 +830,36 @@ TEST(ReferenceRender, BandsOfRowsOnSeveralThreadsGiveTheOneThreadOutput) {
   }
 }
 
+TEST(ReferenceRender, BandsOfRowsHandleShortImagesAndDepthOnlyRenders) {
+  // Heights below one band's 32 rows, a last band shorter than the others, and a render without
+  // colour (no shading) with back faces culled, on up to 64 threads.
+  const Model model = makeDemoModel("room").value();
+  const Pose T = demoViewpoints("room").front();
+  for (int height : {1, 31, 63, 65, 66, 97}) {
+    PinholeCamera cam;
+    cam.width = 48;
+    cam.height = height;
+    cam.fx = cam.fy = 40;
+    cam.cx = 23.5;
+    cam.cy = 0.5 * (height - 1);
+    for (uint32_t outputs : {static_cast<uint32_t>(kRenderAll), static_cast<uint32_t>(kRenderDepth)}) {
+      RenderSettings one;
+      one.outputs = outputs;
+      one.cull_back_faces = outputs == kRenderDepth;
+      const RenderOutput expected = renderOk(model, cam, T, one);
+      for (int threads : {2, 64}) {
+        RenderSettings several = one;
+        several.threads = threads;
+        const RenderOutput out = renderOk(model, cam, T, several);
+        EXPECT_EQ(out.rgba.data, expected.rgba.data) << height << " rows, " << threads << " threads";
+        EXPECT_EQ(out.depth.data, expected.depth.data) << height << " rows, " << threads << " threads";
+        EXPECT_EQ(out.normals.data, expected.normals.data) << height << " rows, " << threads << " threads";
+        EXPECT_EQ(out.triangles_drawn, expected.triangles_drawn);
+      }
+    }
+  }
+}
+
 TEST(ReferenceRender, EmptyModelRendersBackground) {
   const PinholeCamera cam;
   RenderSettings settings;

@@ -64,6 +64,14 @@ if(NOT out MATCHES "global initialization over the whole database \\(the sequenc
    OR NOT out MATCHES "[1-9][0-9]* relocalized")
   message(FATAL_ERROR "track with no start pose did not search the database:\n${out}")
 endif()
+run_fails("an offset of no start pose" "--init-offset: the sequence gives no start pose" track --sequence ${nopose}
+          --out ${WORK}/x/traj.txt --db ${db} --init-offset 0.1,0,0,0,0,0 --backend cpu)
+# A sequence that gives its start pose starts there, with or without a database.
+run_ok("track from the start pose with a database" track --sequence ${seq} --out ${WORK}/sp/traj.txt --db ${db}
+       --backend cpu --keyframes sync)
+if(out MATCHES "global initialization" OR NOT out MATCHES "0 initializing")
+  message(FATAL_ERROR "track --db from a start pose searched the database:\n${out}")
+endif()
 run_ok("eval of the no-start-pose run" eval --estimate ${WORK}/np/traj.txt --groundtruth ${seq}/groundtruth.txt
        --json ${WORK}/np/eval.json)
 json_number(median ${WORK}/np/eval.json "ate;translation_m;median")

@@ -361,6 +361,8 @@ Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::ve
                static_cast<int>(std::ceil(2.0 * kThumbnailHeight * camera.width / std::max(1, camera.height))));
   const PinholeCamera small = scaledCamera(camera, width);
   RenderSettings look = render;
+  // One thread per renderer already: a CPU renderer's bands would only nest threads.
+  if (renderers.size() > 1) look.threads = 1;
   look.outputs = kRenderColor | kRenderDepth;
   look.cull_back_faces = false;
   RenderSettings culled = look;

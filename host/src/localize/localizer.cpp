@@ -8,10 +8,10 @@
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
-#include <thread>
 
 #include "vkloc/core/clock.hpp"
 #include "vkloc/core/numeric.hpp"
+#include "vkloc/core/threads.hpp"
 #include "vkloc/render/cpu_renderer.hpp"
 #include "vkloc/track/image_motion.hpp"
 
@@ -112,6 +112,9 @@ Status validateOptions(const LocalizerOptions& o) {
   }
   VKLOC_TRY_STATUS(validateInertialAiding(o.inertial));
   VKLOC_TRY_STATUS(validateRenderSettings(o.render));
+  if (o.keyframe_render_threads < 0 || o.keyframe_render_threads > 64) {
+    return makeError(ErrorCode::kInvalidArgument, "Localizer: keyframe_render_threads must be in 0..64");
+  }
   VKLOC_TRY_STATUS(validateReferenceEdgeOptions(o.reference));
   VKLOC_TRY_STATUS(validateEdgeTrackerOptions(o.tracker));
   VKLOC_TRY_STATUS(validateEdgeDetectorOptions(o.live.detector));
@@ -1168,16 +1171,15 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
     if (!created.ok()) return created.error();
     renderer = std::move(created).value();
   }
-  // Keyframes made on the caller's thread use every core (the CPU rasterizer's bands, the edge
-  // levels on OpenCV's pool); the worker thread uses its own alone.
+  // Synchronous keyframes use every core (the CPU rasterizer's bands, the edge levels on
+  // OpenCV's pool); the worker thread uses its own alone.
+  const bool on_worker = options.keyframe_threading == KeyframeThreading::kWorkerThread;
   ReferenceEdgeOptions keyframe_edges = impl->options.reference;
+  if (on_worker) keyframe_edges.parallel = false;
   RenderSettings keyframe_render = impl->options.render;
-  if (options.keyframe_threading == KeyframeThreading::kWorkerThread) {
-    keyframe_edges.parallel = false;
-    keyframe_render.threads = 1;
-  } else {
-    keyframe_render.threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 64u));
-  }
+  keyframe_render.threads = options.keyframe_render_threads > 0 ? options.keyframe_render_threads
+                            : on_worker                         ? 1
+                                                                : availableCores();
   auto maker = std::make_unique<KeyframeMaker>(std::move(renderer), camera, keyframe_render, keyframe_edges);
   impl->keyframes = std::make_unique<KeyframeManager>(std::move(maker), keyframeOptions(options));
 

@@ -48,8 +48,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <string>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -446,7 +448,7 @@ class Rasterizer {
     const int w = cam_.width;
     // The level of detail (lambda) of a 2 x 2 quad, kept for the quad's other pixels that show
     // the same triangle (quad_winner: that triangle's Shading, -1 none yet), per row pair.
-    std::vector<int32_t> quad_winner(static_cast<size_t>(w / 2 + 1));
+    std::vector<int32_t> quad_winner(static_cast<size_t>(w / 2 + 1), -1);
     std::vector<double> quad_lambda(quad_winner.size());
     for (int j = row_begin_; j < row_end_; ++j) {
       if ((j & 1) == 0) std::fill(quad_winner.begin(), quad_winner.end(), -1);
@@ -599,15 +601,36 @@ Result<RenderOutput> renderWithMipLevels(const Model& model, const std::vector<s
     }
     raster.finish();
   };
-  // Bands of an even number of rows (a 2 x 2 quad stays in one), at least 32 rows each.
+  // Bands of an even number of rows (a 2 x 2 quad stays in one), at most one per 32 rows, one
+  // per thread. An exception in a band is rethrown here once every thread has joined; bands whose
+  // thread could not be started are drawn on this one.
   const int bands = std::max(1, std::min(settings.threads, h / 32));
   const int band_rows = ((h + bands - 1) / bands + 1) & ~1;
+  const int used_bands = (h + band_rows - 1) / band_rows;
+  std::vector<std::exception_ptr> failures(static_cast<size_t>(used_bands));
+  auto drawBandCaught = [&](int b) {
+    try {
+      drawBand(b * band_rows, std::min(h, (b + 1) * band_rows), b == 0);
+    } catch (...) {
+      failures[static_cast<size_t>(b)] = std::current_exception();
+    }
+  };
   std::vector<std::thread> workers;
-  for (int b = 1; b < bands && b * band_rows < h; ++b) {
-    workers.emplace_back(drawBand, b * band_rows, std::min(h, (b + 1) * band_rows), false);
+  workers.reserve(static_cast<size_t>(used_bands - 1));
+  int next = 1;
+  for (; next < used_bands; ++next) {
+    try {
+      workers.emplace_back(drawBandCaught, next);
+    } catch (const std::system_error&) {
+      break;
+    }
   }
-  drawBand(0, std::min(h, band_rows), true);
+  drawBandCaught(0);
+  for (; next < used_bands; ++next) drawBandCaught(next);
   for (std::thread& worker : workers) worker.join();
+  for (const std::exception_ptr& failure : failures) {
+    if (failure) std::rethrow_exception(failure);
+  }
   out.gray = rgbaToGray(out.rgba);
   return out;
 }

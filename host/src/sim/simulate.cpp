@@ -15,6 +15,7 @@
 
 #include "vkloc/core/atomic_file.hpp"
 #include "vkloc/core/random.hpp"
+#include "vkloc/core/threads.hpp"
 #include "vkloc/io/image_io.hpp"
 #include "vkloc/sim/demo_models.hpp"
 
@@ -84,6 +85,8 @@ Status validateOptions(const SimulationOptions& o) {
     return bad(fmt::format("simplify ratio {} is outside (0, 1]", d.simplify_ratio));
   if (!(d.hole_fraction >= 0.0 && d.hole_fraction <= 0.9))
     return bad(fmt::format("hole fraction {} is outside 0..0.9", d.hole_fraction));
+  if (o.render_threads < 0 || o.render_threads > 64)
+    return bad(fmt::format("render threads {} are outside 0..64", o.render_threads));
   RenderSettings s;
   s.near_m = o.near_m;
   s.far_m = o.far_m;
@@ -371,8 +374,7 @@ Result<SimulationReport> simulateSequence(const Model& model, const SimulationOp
   RenderSettings settings;
   settings.near_m = options.near_m;
   settings.far_m = options.far_m;
-  // Frames are made one after another: the CPU rasterizer draws each with one band per core.
-  settings.threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 64u));
+  settings.threads = options.render_threads > 0 ? options.render_threads : availableCores();
   // A lens other than the ideal pinhole: its image is resampled from pinhole renders.
   std::optional<LensRig> rig;
   if (Result<LensCamera> lens = lensCamera(options.camera); lens.ok() && !lens->isIdealPinhole()) {

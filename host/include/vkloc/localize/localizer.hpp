@@ -182,9 +182,15 @@ struct LocalizerOptions {
   /// "Performance"). Waiting keyframes (start, loss) are made on the caller's thread either way.
   bool keyframe_worker_background = false;
   /// Near/far clip planes (metres) and back-face culling of keyframe renders; `outputs` and
-  /// `threads` are set by the Localizer (colour, depth and normals are always rendered; the CPU
-  /// rasterizer uses every core for keyframes made synchronously, one thread on the worker).
+  /// `threads` are set by the Localizer (colour, depth and normals are always rendered; threads:
+  /// keyframe_render_threads).
   RenderSettings render;
+  /// Threads of the CPU rasterizer's keyframe renders (RenderSettings::threads; 0..64). 0 =
+  /// automatic: every core this process may use (availableCores) with synchronous keyframes,
+  /// where the caller waits for them, and 1 with the keyframe worker, which runs beside
+  /// tracking (its waiting keyframes of a start or a loss, and the relocalization's renders,
+  /// included). GPU renderers ignore it.
+  int keyframe_render_threads = 0;
   LiveFrameOptions live;                                ///< Live-image pyramid, edges and distance fields.
   ReferenceEdgeOptions reference;                       ///< Keyframe edge points (levels are set to live.levels).
   EdgeTrackerOptions tracker;                           ///< Gauss-Newton alignment and lost-frame thresholds.

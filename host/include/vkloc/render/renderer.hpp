@@ -37,7 +37,7 @@ struct RenderSettings {
   /// projected from the nearest point of the block's bounds). 0 always draws full detail. The
   /// CPU reference ignores it.
   double lod_pixel_error = 0.0;
-  /// CPU reference: threads that each draw a band of rows (1..64; bands of at least 32 rows).
+  /// CPU reference: threads that each draw a band of rows (1..64; at most one band per 32 rows).
   /// The output is the same for any count. GPU renderers ignore it.
   int threads = 1;
 };

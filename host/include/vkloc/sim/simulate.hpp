@@ -186,7 +186,10 @@ struct SimulationOptions {
   int jpeg_quality = 90;  ///< JPEG quality 1..100.
   double near_m = 0.05;   ///< Render near plane, metres.
   double far_m = 5000.0;  ///< Render far plane, metres.
-  uint64_t seed = 1;      ///< Every random choice derives from this.
+  /// Threads of the CPU rasterizer per frame (RenderSettings::threads; 0 = every core this
+  /// process may use, availableCores; at most 64). The files do not depend on it.
+  int render_threads = 0;
+  uint64_t seed = 1;  ///< Every random choice derives from this.
 };
 
 /// Built-in scenarios: scene "city" (demo city, drone trajectory) or "room" (demo room,
