@@ -28,6 +28,7 @@ class GatedRenderer final : public Renderer {
     int started = 0;
     int finished = 0;
     bool fail = false;
+    std::vector<int> threads;  ///< RenderSettings::threads of every render, in order.
     void hold(bool h) {
       {
         std::lock_guard<std::mutex> lock(mutex);
@@ -48,6 +49,7 @@ class GatedRenderer final : public Renderer {
     {
       std::unique_lock<std::mutex> lock(control_->mutex);
       ++control_->started;
+      control_->threads.push_back(settings.threads);
       control_->changed.notify_all();
       control_->changed.wait(lock, [&] { return !control_->held; });
       if (control_->fail) {
@@ -127,6 +129,25 @@ TEST(KeyframeMaker, MakesEdgePointsAndLeavesOutDroppedKinds) {
   EXPECT_EQ(failed.error().code, ErrorCode::kGpuError);
 }
 
+TEST(KeyframeMaker, WaitingCallsUseTheWaitingThreadsAndMakeTheSameKeyframe) {
+  auto control = std::make_shared<GatedRenderer::Control>();
+  auto maker = gatedMaker(control);
+  maker->setWaitingThreads(3, true);
+  auto plain = maker->make(requestAt(2));
+  auto waiting = maker->make(requestAt(2), true);
+  ASSERT_TRUE(plain.ok() && waiting.ok());
+  ASSERT_EQ((*plain)->reference.points.size(), (*waiting)->reference.points.size());
+  for (size_t i = 0; i < (*plain)->reference.points.size(); ++i) {
+    EXPECT_EQ((*plain)->reference.points[i].x, (*waiting)->reference.points[i].x);
+    EXPECT_EQ((*plain)->reference.points[i].y, (*waiting)->reference.points[i].y);
+    EXPECT_EQ((*plain)->reference.points[i].z, (*waiting)->reference.points[i].z);
+  }
+  ASSERT_TRUE(maker->renderView(test::localizeCamera(), test::localizeTruth(2), true).ok());
+  ASSERT_TRUE(maker->renderView(test::localizeCamera(), test::localizeTruth(2)).ok());
+  std::lock_guard<std::mutex> lock(control->mutex);
+  EXPECT_EQ(control->threads, (std::vector<int>{1, 3, 3, 1}));
+}
+
 TEST(KeyframeWorker, MakesRequestsBesideTheCaller) {
   auto control = std::make_shared<GatedRenderer::Control>();
   KeyframeWorker worker(gatedMaker(control), true);
@@ -169,7 +190,9 @@ TEST(KeyframeWorker, ANewRequestReplacesTheWaitingOne) {
 
 TEST(KeyframeWorker, MakeNowDropsOlderWorkAndRunsOnTheCaller) {
   auto control = std::make_shared<GatedRenderer::Control>();
-  KeyframeWorker worker(gatedMaker(control), true);
+  auto maker = gatedMaker(control);
+  maker->setWaitingThreads(3, false);
+  KeyframeWorker worker(std::move(maker), true);
   control->hold(true);
   worker.request(requestAt(1));
   ASSERT_TRUE(control->waitStarted(1));
@@ -190,6 +213,8 @@ TEST(KeyframeWorker, MakeNowDropsOlderWorkAndRunsOnTheCaller) {
   EXPECT_FALSE(*worker.takeFinished());
   std::lock_guard<std::mutex> lock(control->mutex);
   EXPECT_EQ(control->started, 2);  // 1 and 9
+  // The worker's own render on its one thread, the caller's (it waits) on the waiting threads.
+  EXPECT_EQ(control->threads, (std::vector<int>{1, 3}));
 }
 
 TEST(KeyframeWorker, ErrorsReachTheCallerAndDiscardDropsResults) {

@@ -28,15 +28,31 @@ double medianDepth(const ImageF32& depth) {
 
 KeyframeMaker::KeyframeMaker(std::unique_ptr<Renderer> renderer, const PinholeCamera& camera,
                              const RenderSettings& render, const ReferenceEdgeOptions& reference)
-    : renderer_(std::move(renderer)), camera_(camera), render_(render), reference_(reference) {
+    : renderer_(std::move(renderer)),
+      camera_(camera),
+      render_(render),
+      reference_(reference),
+      waiting_render_threads_(render.threads),
+      waiting_parallel_reference_(reference.parallel) {
   render_.outputs = kRenderAll;
 }
 
-Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeRequest& request) {
+void KeyframeMaker::setWaitingThreads(int render_threads, bool parallel_reference) {
+  waiting_render_threads_ = render_threads;
+  waiting_parallel_reference_ = parallel_reference;
+}
+
+Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeRequest& request, bool waiting) {
   auto keyframe = std::make_shared<Keyframe>();
   keyframe->request = request;
+  RenderSettings render = render_;
+  ReferenceEdgeOptions reference_options = reference_;
+  if (waiting) {
+    render.threads = waiting_render_threads_;
+    reference_options.parallel = waiting_parallel_reference_;
+  }
   auto t0 = SteadyClock::now();
-  Result<RenderOutput> view = renderer_->render(camera_, request.T_world_ref, render_);
+  Result<RenderOutput> view = renderer_->render(camera_, request.T_world_ref, render);
   if (!view.ok()) return view.error();
   keyframe->render_ms = msSince(t0);
   t0 = SteadyClock::now();
@@ -45,7 +61,8 @@ Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeReques
   if (request.keep_depth) keyframe->depth = view->depth;
   // The render's depth and normals are handed to the reference stage (no 5 MB copy unless
   // keep_depth asked for the depth).
-  Result<EdgeReference> reference = buildEdgeReference(std::move(*view), camera_, request.T_world_ref, reference_);
+  Result<EdgeReference> reference =
+      buildEdgeReference(std::move(*view), camera_, request.T_world_ref, reference_options);
   if (!reference.ok()) return reference.error();
   const EdgeKindMask& drop = request.dropped_kinds;
   if (drop[0] || drop[1] || drop[2]) {
@@ -66,9 +83,10 @@ Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeReques
   return std::shared_ptr<const Keyframe>(std::move(keyframe));
 }
 
-Result<RenderOutput> KeyframeMaker::renderView(const PinholeCamera& camera, const Pose& T_world_camera) {
+Result<RenderOutput> KeyframeMaker::renderView(const PinholeCamera& camera, const Pose& T_world_camera, bool waiting) {
   RenderSettings settings = render_;
   settings.outputs = kRenderColor | kRenderDepth;
+  if (waiting) settings.threads = waiting_render_threads_;
   return renderer_->render(camera, T_world_camera, settings);
 }
 
@@ -145,13 +163,13 @@ Result<std::shared_ptr<const Keyframe>> KeyframeWorker::takeFinished() {
 Result<std::shared_ptr<const Keyframe>> KeyframeWorker::makeNow(const KeyframeRequest& request) {
   discard();
   std::lock_guard<std::mutex> maker_lock(maker_mutex_);
-  return maker_->make(request);
+  return maker_->make(request, true);
 }
 
 Result<RenderOutput> KeyframeWorker::renderNow(const PinholeCamera& camera, const Pose& T_world_camera) {
   discard();
   std::lock_guard<std::mutex> maker_lock(maker_mutex_);
-  return maker_->renderView(camera, T_world_camera);
+  return maker_->renderView(camera, T_world_camera, true);
 }
 
 void KeyframeWorker::discard() {

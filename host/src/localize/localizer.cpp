@@ -1177,10 +1177,12 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
   ReferenceEdgeOptions keyframe_edges = impl->options.reference;
   if (on_worker) keyframe_edges.parallel = false;
   RenderSettings keyframe_render = impl->options.render;
-  keyframe_render.threads = options.keyframe_render_threads > 0 ? options.keyframe_render_threads
-                            : on_worker                         ? 1
-                                                                : availableCores();
+  const int cores = options.keyframe_render_threads > 0 ? options.keyframe_render_threads : availableCores();
+  keyframe_render.threads = on_worker && options.keyframe_render_threads == 0 ? 1 : cores;
   auto maker = std::make_unique<KeyframeMaker>(std::move(renderer), camera, keyframe_render, keyframe_edges);
+  // What the caller waits for (a start's or a loss's keyframe, the relocalization's renders)
+  // runs while the worker and the tracking thread are idle: every core.
+  maker->setWaitingThreads(cores, impl->options.reference.parallel);
   impl->keyframes = std::make_unique<KeyframeManager>(std::move(maker), keyframeOptions(options));
 
   bool on_device = false;

@@ -53,20 +53,27 @@ class KeyframeMaker {
   /// Takes the renderer over. `reference` levels are those of the live frame.
   KeyframeMaker(std::unique_ptr<Renderer> renderer, const PinholeCamera& camera, const RenderSettings& render,
                 const ReferenceEdgeOptions& reference);
+  /// The render threads and edge-point parallelism of the calls made while the caller waits
+  /// (`waiting` below: a keyframe worker's makeNow and renderNow, when nothing else runs); by
+  /// default those of the constructor.
+  void setWaitingThreads(int render_threads, bool parallel_reference);
   /// Renders colour, depth and normals at request.T_world_ref and builds the edge reference
-  /// without the dropped kinds. Renderer and extraction errors are returned as they are.
-  Result<std::shared_ptr<const Keyframe>> make(const KeyframeRequest& request);
+  /// without the dropped kinds, with the waiting threads when `waiting`. Renderer and
+  /// extraction errors are returned as they are.
+  Result<std::shared_ptr<const Keyframe>> make(const KeyframeRequest& request, bool waiting = false);
   /// The renderer's describe().
   std::string describe() const { return renderer_->describe(); }
   /// A plain render (colour and depth) at any camera and pose, e.g. a small view to compare with
-  /// the live image. Renderer errors as they are.
-  Result<RenderOutput> renderView(const PinholeCamera& camera, const Pose& T_world_camera);
+  /// the live image, with the waiting threads when `waiting`. Renderer errors as they are.
+  Result<RenderOutput> renderView(const PinholeCamera& camera, const Pose& T_world_camera, bool waiting = false);
 
  private:
   std::unique_ptr<Renderer> renderer_;
   PinholeCamera camera_;
   RenderSettings render_;
   ReferenceEdgeOptions reference_;
+  int waiting_render_threads_;
+  bool waiting_parallel_reference_;
   uint64_t next_id_ = 1;
 };
 

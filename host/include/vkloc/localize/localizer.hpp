@@ -186,10 +186,10 @@ struct LocalizerOptions {
   /// keyframe_render_threads).
   RenderSettings render;
   /// Threads of the CPU rasterizer's keyframe renders (RenderSettings::threads; 0..64). 0 =
-  /// automatic: every core this process may use (availableCores) with synchronous keyframes,
-  /// where the caller waits for them, and 1 with the keyframe worker, which runs beside
-  /// tracking (its waiting keyframes of a start or a loss, and the relocalization's renders,
-  /// included). GPU renderers ignore it.
+  /// automatic: every core this process may use (availableCores) where the caller waits for the
+  /// render (synchronous keyframes; with the worker, the waiting keyframes of a start or a loss
+  /// and the relocalization's renders), and 1 on the keyframe worker, which runs beside
+  /// tracking. Another count applies everywhere. GPU renderers ignore it.
   int keyframe_render_threads = 0;
   LiveFrameOptions live;                                ///< Live-image pyramid, edges and distance fields.
   ReferenceEdgeOptions reference;                       ///< Keyframe edge points (levels are set to live.levels).
