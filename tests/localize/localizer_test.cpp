@@ -309,6 +309,9 @@ TEST(Localizer, SynchronousPosesDoNotDependOnTheKeyframeRenderThreads) {
     options.keyframe_render_threads = threads;
     auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
     ASSERT_TRUE(created.ok()) << created.error().message;
+    const std::string summary = (*created)->backendSummary();
+    EXPECT_NE(summary.find(threads == 1 ? "rasterizer, 1 thread;" : "rasterizer, 3 threads;"), std::string::npos)
+        << summary;
     (*created)->reset(test::localizeTruth(0));
     runs.push_back(run(**created, 8));
   }

@@ -226,6 +226,7 @@ struct Localizer::Impl {
   bool calibration_pending = false;
   std::string device_name;  ///< The accelerator's, or "" without one.
   std::string backend_reason;
+  std::string render_threads;  ///< ", N threads" of the CPU rasterizer's keyframes ("" on a device).
 
   std::optional<int64_t> last_t_ns;  ///< Last frame given to localize.
   int64_t frame_index = -1;          ///< Frames given to localize since create.
@@ -1183,6 +1184,12 @@ Result<std::unique_ptr<Localizer>> Localizer::create(const Model& model, const P
   // What the caller waits for (a start's or a loss's keyframe, the relocalization's renders)
   // runs while the worker and the tracking thread are idle: every core.
   maker->setWaitingThreads(cores, impl->options.reference.parallel);
+  if (!accelerator) {
+    impl->render_threads =
+        keyframe_render.threads == cores
+            ? fmt::format(", {} thread{}", cores, cores == 1 ? "" : "s")
+            : fmt::format(", {} thread on the worker, {} while the caller waits", keyframe_render.threads, cores);
+  }
   impl->keyframes = std::make_unique<KeyframeManager>(std::move(maker), keyframeOptions(options));
 
   bool on_device = false;
@@ -1311,8 +1318,8 @@ std::string Localizer::backendSummary() const {
     policy += fmt::format(" (moved > {:g} x depth or > {:g} deg, inliers < {:g}, or {} frames)",
                           r.max_translation_depth_ratio, r.max_rotation_deg, r.min_inlier_ratio, r.max_frames);
   }
-  return fmt::format("render on {}; live edges + alignment on {} ({}); re-render {}, {}{}",
-                     m.keyframes->rendererDescription(), where, m.backend_reason, policy,
+  return fmt::format("render on {}{}; live edges + alignment on {} ({}); re-render {}, {}{}",
+                     m.keyframes->rendererDescription(), m.render_threads, where, m.backend_reason, policy,
                      m.worker() ? "keyframes on a worker thread" : "keyframes made synchronously",
                      m.front && m.front->needsRemap() ? "; lens image remapped by " + m.front->remapDescription() : "");
 }
