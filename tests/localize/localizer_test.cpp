@@ -279,6 +279,43 @@ TEST(Localizer, AnUnknownVelocityStartSearchesUnlessTheFirstPoseIsConfident) {
   }
 }
 
+TEST(Localizer, AFarFrameAfterAnUnknownVelocityStartIsFoundFromPointFeatures) {
+  // A start at frame 0 with no velocity, then frame 40 (the frames between not given, as at a
+  // low frame rate; 0.70 m and a turn away): the point features matched with frame 0, lifted by
+  // a depth render at its pose, give the search's first start, taken at once. (Without it the
+  // image shift's starts and the grid end 0.30 m off here.)
+  constexpr int kSkip = 40;
+  const auto& images = test::localizeFrames(kSkip + 1);
+  auto localizer = makeEkfLocalizer([&](LocalizerOptions& o) { o.motion_search_max_gap_s = 2.5; });
+  ASSERT_TRUE(localizer);
+  localizer->reset(test::localizeTruth(0));
+  std::vector<LocalizationResult> results;
+  for (int i : {0, kSkip}) {
+    for (int64_t t = (i == 0 ? 0 : kFrameNs); t <= i * kFrameNs; t += 5'000'000) {
+      ASSERT_TRUE(localizer->addImu(circlingImuAt(t)).ok());
+    }
+    auto r = localizer->localize(i * kFrameNs, images[static_cast<size_t>(i)]);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    results.push_back(*r);
+  }
+  ASSERT_GT(test::translationError(test::localizeTruth(0), test::localizeTruth(kSkip)), 0.6);
+  EXPECT_EQ(results[1].state, TrackingState::kTracking);
+  EXPECT_LT(test::translationError(results[1].T_world_camera, test::localizeTruth(kSkip)), 3e-3);
+  EXPECT_EQ(results[1].motion_search_probes, 1);  // the feature start, first of the search
+}
+
+TEST(Localizer, MotionSearchFeatureAgreementOutOfRangeIsRefused) {
+  for (int k = 0; k < 3; ++k) {
+    LocalizerOptions options;
+    if (k == 0) options.motion_search_feature_min_inliers = 3;
+    if (k == 1) options.motion_search_feature_min_inlier_fraction = 1.5;
+    if (k == 2) options.motion_search_feature_min_inlier_fraction = std::numeric_limits<double>::quiet_NaN();
+    auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
+    ASSERT_FALSE(created.ok()) << k;
+    EXPECT_NE(created.error().message.find("motion_search_feature_min_inlier"), std::string::npos);
+  }
+}
+
 TEST(Localizer, AMotionSearchStartScoreOutsideZeroToOneIsRefused) {
   for (double bad : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
     LocalizerOptions options;

@@ -254,6 +254,20 @@ struct LocalizerOptions {
   /// is aligned against a keyframe rendered at it.
   double motion_search_max_gap_s = 0.25;
   double motion_search_min_response = 0.1;
+  /// First of all, the motion search aligns from the pose of ORB point features matched between
+  /// the last tracked frame (within motion_search_max_gap_s) and this one, lifted to 3D by a
+  /// depth render at the last tracked pose (featurePose with relocalization.features). Two
+  /// camera images match where a render and an image do not (blur, light), and the pose needs
+  /// no guess of the motion: a start at an unknown velocity, a frame rate too low for the
+  /// shift and the grid (a blurred drone 2.5 m a frame).
+  bool motion_search_feature_start = true;
+  /// The alignment from that start is taken without its verification score when it ends within
+  /// relocalization.feature_agree_fraction x the scene depth and feature_agree_deg of the
+  /// feature pose, and that pose has at least this many RANSAC inliers making at least this
+  /// fraction of its matches (two independent poses agree; a consensus among wrong matches, a
+  /// repeated facade, leaves most matches out). Otherwise it is verified as any other start.
+  int motion_search_feature_min_inliers = 30;
+  double motion_search_feature_min_inlier_fraction = 0.5;
   /// The motion search keeps the best verified result of its starts and stops at one whose
   /// verification score reaches this (true poses of the development sequences score 0.5-1);
   /// while the prior's velocity is unobserved, at motion_search_start_score if higher.
