@@ -532,15 +532,40 @@ struct Localizer::Impl {
     // scene depth (shift = -f t / depth). Motion along the view (a zoom) does not shift the
     // image: steps along it of 1.5 basins at a quarter of the image diagonal are tried in turn.
     // The shift is good to a few pixels, so these starts align from level 1 at most.
+    // A start near the last tracked frame, aligned from level 1 at most (it is good to a few
+    // pixels). One more than a grid step from the guess's keyframe is aligned against a keyframe
+    // rendered at it (or an earlier start's within a step of it), as the grid's candidates are:
+    // near surfaces show other parallax and occlusion edges from there (cycles-room at a third of
+    // its rate, start 6: a step of 0.36 m and 20 deg at 1.5 m, the image shift 119 px, did not
+    // converge against the keyframe at the previous pose).
+    const int shift_level = std::min(search_level, 1);
+    auto alignNearStart = [&](const Pose& start) -> Result<TrackResult> {
+      const auto beyondStep = [&](const Keyframe& from) {
+        return (start.translation() - from.request.T_world_ref.translation()).norm() > grid.step_m;
+      };
+      if (!beyondStep(keyframe)) {
+        VKLOC_TRY_STATUS(restoreKeyframe(guess_keyframe));
+      } else if (beyondStep(*keyframes->current())) {
+        VKLOC_TRY_STATUS(makeKeyframe(start, out.t_ns, out));
+      }
+      const int saved_level = search_level;
+      search_level = shift_level;
+      Result<TrackResult> r = alignFrom(start);
+      search_level = saved_level;
+      ++out.motion_search_probes;
+      return r;
+    };
     const bool recent_frame = last_tracked_gray && static_cast<double>(out.t_ns - last_tracked_gray->t_ns) * 1e-9 <=
                                                        options.motion_search_max_gap_s;
     // A start at the pose of point features matched with the last tracked frame (its depth
     // rendered at its pose): against a keyframe rendered there when it lies beyond a grid step.
     if (recent_frame && options.motion_search_feature_start) {
-      const auto t_features = SteadyClock::now();
       const Pose& T_previous = last_tracked_gray->T_world_camera;
+      const auto t_render = SteadyClock::now();
       Result<RenderOutput> previous_view = keyframes->renderView(camera, T_previous);
       if (!previous_view.ok()) return previous_view.error();
+      out.render_ms += msSince(t_render);
+      const auto t_features = SteadyClock::now();
       const FeaturePoseOptions& f = options.relocalization.features;
       Result<PointFeatures> previous = detectPointFeatures(last_tracked_gray->gray, f.max_features);
       if (!previous.ok()) return previous.error();
@@ -549,23 +574,16 @@ struct Localizer::Impl {
       Result<std::optional<FeaturePose>> pose =
           featurePose(*now, *previous, previous_view->depth, camera, T_previous, f);
       if (!pose.ok()) return pose.error();
-      out.render_ms += msSince(t_features);
+      out.align_ms += msSince(t_features);
       if (pose->has_value()) {
         const Pose start = (*pose)->T_world_camera;
-        if ((start.translation() - keyframe.request.T_world_ref.translation()).norm() > grid.step_m) {
-          VKLOC_TRY_STATUS(makeKeyframe(start, out.t_ns, out));
-        }
-        const int saved_level = search_level;
-        search_level = std::min(search_level, 1);
-        Result<TrackResult> r = alignFrom(start);
-        search_level = saved_level;
+        Result<TrackResult> r = alignNearStart(start);
         if (!r.ok()) return r.error();
-        ++out.motion_search_probes;
         // Two independent poses that agree: the edges' alignment within feature_agree_fraction of
         // the depth and feature_agree_deg of a feature pose most of whose matches are inliers
-        // (motion_search_feature_agreement). Such a pose is taken without the verification
-        // score, which scores true poses low on blurred images (a blurred copy of cycles-city at
-        // a third of its frame rate: 1.8 cm from the truth at 0.13).
+        // (motion_search_feature_min_inliers, _min_inlier_fraction). Such a pose is taken
+        // without the verification score, which scores true poses low on blurred images (a
+        // blurred copy of cycles-city at a third of its frame rate: 1.8 cm from the truth at 0.13).
         const RelocalizationOptions& ro = options.relocalization;
         const Pose delta = start.inverse() * r->T_world_camera;
         const bool agreed =
@@ -590,7 +608,6 @@ struct Localizer::Impl {
         }
       }
       if (!peaks.empty()) out.image_shift_px = std::hypot(peaks.front().dx_px, peaks.front().dy_px);
-      const int shift_level = std::min(search_level, 1);
       const double radius_px = 0.25 * std::hypot(camera.width, camera.height);
       const double step_z =
           1.5 * options.search_basin_px * std::ldexp(1.0, shift_level) / radius_px * keyframe.scene_depth_m;
@@ -603,25 +620,8 @@ struct Localizer::Impl {
           const Eigen::Vector3d t_camera(-shift.dx_px * keyframe.scene_depth_m / camera.fx,
                                          -shift.dy_px * keyframe.scene_depth_m / camera.fy, z * step_z);
           start.translation() = last_tracked_gray->T_world_camera.translation() + guess.linear() * t_camera;
-          // A start more than a grid step from the guess's keyframe is aligned against a
-          // keyframe rendered at it (or an earlier start's within a step of it), as the grid's
-          // candidates are: near surfaces show other parallax and occlusion edges from there
-          // (cycles-room at a third of its rate, start 6: a step of 0.36 m and 20 deg at 1.5 m,
-          // the image shift 119 px, did not converge against the keyframe at the previous pose).
-          const auto beyondStep = [&](const Keyframe& from) {
-            return (start.translation() - from.request.T_world_ref.translation()).norm() > grid.step_m;
-          };
-          if (!beyondStep(keyframe)) {
-            VKLOC_TRY_STATUS(restoreKeyframe(guess_keyframe));
-          } else if (beyondStep(*keyframes->current())) {
-            VKLOC_TRY_STATUS(makeKeyframe(start, out.t_ns, out));
-          }
-          const int saved_level = search_level;
-          search_level = shift_level;
-          Result<TrackResult> r = alignFrom(start);
-          search_level = saved_level;
+          Result<TrackResult> r = alignNearStart(start);
           if (!r.ok()) return r.error();
-          ++out.motion_search_probes;
           if (consider(std::move(r).value())) return std::move(*best);
         }
       }

@@ -564,43 +564,43 @@ Result<RenderOutput> renderWithMipLevels(const Model& model, const std::vector<s
   auto materialOf = [&](int index) -> const Material& {
     return model.materials.empty() ? default_material : model.materials[index];
   };
-  // Every band draws the whole scene into its own rows: a pixel sees the triangles in the same
-  // order whatever the bands, so the output does not depend on their number.
-  auto drawBand = [&](int row_begin, int row_end, bool count) {
-    Rasterizer raster(model, mip_levels, camera, settings, p_camera, row_begin, row_end, out);
-    auto drawRanges = [&](uint32_t first_range, uint32_t range_count) {
-      for (uint32_t r = first_range; r < first_range + range_count; ++r) {
-        const DrawRange& dr = model.ranges[r];
-        if (count) out.triangles_drawn += dr.index_count / 3;
-        raster.drawRange(dr.first_index, dr.index_count, materialOf(dr.material));
+  // The draw calls, culled and counted once: the blocks in the frustum, their ranges in order.
+  struct DrawCall {
+    uint32_t first_index, index_count;
+    const Material* material;
+  };
+  std::vector<DrawCall> calls;
+  auto addRanges = [&](uint32_t first_range, uint32_t range_count) {
+    for (uint32_t r = first_range; r < first_range + range_count; ++r) {
+      const DrawRange& dr = model.ranges[r];
+      out.triangles_drawn += dr.index_count / 3;
+      calls.push_back({dr.first_index, dr.index_count, &materialOf(dr.material)});
+    }
+  };
+  if (!model.blocks.empty()) {
+    for (const Block& block : model.blocks) {
+      if (!aabbInFrustumFromCamera(block.bounds, camera, T_camera_world, settings.near_m, settings.far_m)) {
+        continue;
       }
-    };
-    if (!model.blocks.empty()) {
-      for (const Block& block : model.blocks) {
-        if (!aabbInFrustumFromCamera(block.bounds, camera, T_camera_world, settings.near_m, settings.far_m)) {
-          continue;
-        }
-        if (count) ++out.blocks_drawn;
-        drawRanges(block.first_range, block.range_count);
-      }
-    } else if (!model.indices.empty()) {
-      // A model without blocks (e.g. built by hand) is drawn as one block over all its ranges,
-      // or over all its triangles with the first material when it has no ranges either.
-      Aabb bounds;
-      for (size_t i = 0; i < model.vertexCount(); ++i) bounds.extend(&model.positions[3 * i]);
-      if (aabbInFrustum(bounds, camera, T_world_camera, settings.near_m, settings.far_m)) {
-        if (count) ++out.blocks_drawn;
-        if (!model.ranges.empty()) {
-          drawRanges(0, static_cast<uint32_t>(model.ranges.size()));
-        } else {
-          const auto n = static_cast<uint32_t>(model.indices.size());
-          if (count) out.triangles_drawn += n / 3;
-          raster.drawRange(0, n, materialOf(0));
-        }
+      ++out.blocks_drawn;
+      addRanges(block.first_range, block.range_count);
+    }
+  } else if (!model.indices.empty()) {
+    // A model without blocks (e.g. built by hand) is drawn as one block over all its ranges,
+    // or over all its triangles with the first material when it has no ranges either.
+    Aabb bounds;
+    for (size_t i = 0; i < model.vertexCount(); ++i) bounds.extend(&model.positions[3 * i]);
+    if (aabbInFrustum(bounds, camera, T_world_camera, settings.near_m, settings.far_m)) {
+      ++out.blocks_drawn;
+      if (!model.ranges.empty()) {
+        addRanges(0, static_cast<uint32_t>(model.ranges.size()));
+      } else {
+        const auto n = static_cast<uint32_t>(model.indices.size());
+        out.triangles_drawn += n / 3;
+        calls.push_back({0, n, &materialOf(0)});
       }
     }
-    raster.finish();
-  };
+  }
   // Bands of an even number of rows (a 2 x 2 quad stays in one), at most one per 32 rows, one
   // per thread. An exception in a band is rethrown here once every thread has joined; bands whose
   // thread could not be started are drawn on this one.
@@ -608,9 +608,14 @@ Result<RenderOutput> renderWithMipLevels(const Model& model, const std::vector<s
   const int band_rows = ((h + bands - 1) / bands + 1) & ~1;
   const int used_bands = (h + band_rows - 1) / band_rows;
   std::vector<std::exception_ptr> failures(static_cast<size_t>(used_bands));
+  // Every band makes every call into its own rows: a pixel sees the triangles in the same order
+  // whatever the bands, so the output does not depend on their number.
   auto drawBandCaught = [&](int b) {
     try {
-      drawBand(b * band_rows, std::min(h, (b + 1) * band_rows), b == 0);
+      Rasterizer raster(model, mip_levels, camera, settings, p_camera, b * band_rows, std::min(h, (b + 1) * band_rows),
+                        out);
+      for (const DrawCall& call : calls) raster.drawRange(call.first_index, call.index_count, *call.material);
+      raster.finish();
     } catch (...) {
       failures[static_cast<size_t>(b)] = std::current_exception();
     }
