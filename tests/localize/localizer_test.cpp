@@ -305,14 +305,18 @@ TEST(Localizer, AFarFrameAfterAnUnknownVelocityStartIsFoundFromPointFeatures) {
 }
 
 TEST(Localizer, MotionSearchFeatureAgreementOutOfRangeIsRefused) {
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 5; ++k) {
     LocalizerOptions options;
+    if (k == 3) options.motion_search_feature_attitude_sigmas = -1.0;
+    if (k == 4) options.motion_search_feature_attitude_sigmas = std::numeric_limits<double>::infinity();
     if (k == 0) options.motion_search_feature_min_inliers = 3;
     if (k == 1) options.motion_search_feature_min_inlier_fraction = 1.5;
     if (k == 2) options.motion_search_feature_min_inlier_fraction = std::numeric_limits<double>::quiet_NaN();
     auto created = Localizer::create(test::makeBoxOnGround(), test::localizeCamera(), options, nullptr);
     ASSERT_FALSE(created.ok()) << k;
-    EXPECT_NE(created.error().message.find("motion_search_feature_min_inlier"), std::string::npos);
+    EXPECT_NE(created.error().message.find(k < 3 ? "motion_search_feature_min_inlier"
+                                                 : "motion_search_feature_attitude_sigmas"),
+              std::string::npos);
   }
 }
 

@@ -494,5 +494,42 @@ TEST(PriorRestart, ARefusedPoseCountsWhenConfidentOrBetterThanWhatThePriorTook) 
   EXPECT_FALSE(refusalCountsAgainstPrior(std::nan(""), poor, 5, 0.5, 0.15));
 }
 
+// At the first frame after a start at an unknown velocity the gyro's attitude tells an alignment
+// that slid along the turn-for-translation valley from a feature pose that did not.
+TEST(FeatureStart, TheGyrosAttitudeSidesWithTheFeaturePoseOnlyWhenTheAlignmentTurnedAway) {
+  MotionPrediction prediction;
+  prediction.inertial = true;
+  prediction.T_world_camera = poseAt(1.0, 0);
+  const double sigma_rad = 0.1 * EIGEN_PI / 180.0;
+  prediction.covariance.bottomRightCorner<3, 3>() = sigma_rad * sigma_rad * Eigen::Matrix3d::Identity();
+  const auto turned = [&](double deg, const Eigen::Vector3d& axis) {
+    Pose T = prediction.T_world_camera;
+    T.linear() = T.linear() * expSO3(deg * EIGEN_PI / 180.0 * axis.normalized());
+    T.translation() += Eigen::Vector3d(0.03, 0, 0);  // the position plays no part
+    return T;
+  };
+  const Eigen::Vector3d y = Eigen::Vector3d::UnitY();
+  EXPECT_TRUE(attitudeFavoursFeaturePose(prediction, turned(0.09, y), turned(0.40, y), 2.5));   // 4 sigmas vs 0.9
+  EXPECT_FALSE(attitudeFavoursFeaturePose(prediction, turned(0.09, y), turned(0.20, y), 2.5));  // 2 sigmas: within
+  EXPECT_FALSE(
+      attitudeFavoursFeaturePose(prediction, turned(0.25, y), turned(0.40, y), 2.5));  // feature not nearer by half
+  EXPECT_FALSE(
+      attitudeFavoursFeaturePose(prediction, turned(0.79, y), turned(0.05, y), 2.5));  // the feature pose turned
+  // The covariance's shape counts: 0.4 deg about an axis the gyro knows to 0.5 deg is nothing.
+  MotionPrediction loose = prediction;
+  loose.covariance(4, 4) = std::pow(0.5 * EIGEN_PI / 180.0, 2);
+  EXPECT_FALSE(attitudeFavoursFeaturePose(loose, turned(0.09, y), turned(0.40, y), 2.5));
+  EXPECT_TRUE(attitudeFavoursFeaturePose(loose, turned(0.09, Eigen::Vector3d::UnitX()),
+                                         turned(0.40, Eigen::Vector3d::UnitX()), 2.5));
+  // Off: sigmas 0, a prediction not from the IMU, no rotation covariance.
+  EXPECT_FALSE(attitudeFavoursFeaturePose(prediction, turned(0.09, y), turned(0.40, y), 0.0));
+  MotionPrediction not_inertial = prediction;
+  not_inertial.inertial = false;
+  EXPECT_FALSE(attitudeFavoursFeaturePose(not_inertial, turned(0.09, y), turned(0.40, y), 2.5));
+  MotionPrediction no_covariance = prediction;
+  no_covariance.covariance.setZero();
+  EXPECT_FALSE(attitudeFavoursFeaturePose(no_covariance, turned(0.09, y), turned(0.40, y), 2.5));
+}
+
 }  // namespace
 }  // namespace vkloc

@@ -66,10 +66,12 @@ Status validateOptions(const LocalizerOptions& o) {
                      "motion_search_confident_score and motion_search_start_score in 0..1");
   }
   if (o.motion_search_feature_min_inliers < 4 || o.motion_search_feature_min_inliers > 100000 ||
-      !finiteIn(o.motion_search_feature_min_inlier_fraction, 0.0, 1.0)) {
+      !finiteIn(o.motion_search_feature_min_inlier_fraction, 0.0, 1.0) ||
+      !finiteIn(o.motion_search_feature_attitude_sigmas, 0.0, 1e3)) {
     return makeError(ErrorCode::kInvalidArgument,
-                     "Localizer: need motion_search_feature_min_inliers in 4..100000 and "
-                     "motion_search_feature_min_inlier_fraction in 0..1");
+                     "Localizer: need motion_search_feature_min_inliers in 4..100000, "
+                     "motion_search_feature_min_inlier_fraction in 0..1 and "
+                     "motion_search_feature_attitude_sigmas in 0..1e3");
   }
   if (o.restart_after_refusals < 0 || !finiteIn(o.restart_min_score, 0.0, 1.0) ||
       !finiteIn(o.restart_after_refused_s, 0.0, 1e4) || !finiteIn(o.restart_sigma_velocity_m_s, 0.0, 1e3)) {
@@ -592,6 +594,12 @@ struct Localizer::Impl {
             (*pose)->inliers >= options.motion_search_feature_min_inlier_fraction * (*pose)->matches &&
             delta.translation().norm() <= ro.feature_agree_fraction * keyframes->current()->scene_depth_m &&
             rotationAngleDeg(delta.linear()) <= ro.feature_agree_deg;
+        if (agreed && prediction.velocity_unobserved &&
+            attitudeFavoursFeaturePose(prediction, start, filterPose(*r),
+                                       options.motion_search_feature_attitude_sigmas)) {
+          r->T_world_camera = start;
+          r->T_world_camera_edges = start;
+        }
         if (agreed) return std::move(r).value();
         if (consider(std::move(r).value())) return std::move(*best);
       }

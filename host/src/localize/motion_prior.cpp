@@ -416,4 +416,20 @@ bool refusalCountsAgainstPrior(double score, const std::vector<double>& taken_sc
                      [score](double taken) { return score > taken; });
 }
 
+bool attitudeFavoursFeaturePose(const MotionPrediction& prediction, const Pose& T_world_feature,
+                                const Pose& T_world_aligned, double sigmas) {
+  if (!(sigmas > 0) || !prediction.inertial) return false;
+  const Eigen::Matrix3d C = prediction.covariance.bottomRightCorner<3, 3>();
+  const Eigen::LLT<Eigen::Matrix3d> llt(0.5 * (C + C.transpose()));
+  if (!C.allFinite() || llt.info() != Eigen::Success) return false;
+  // phi with R_x = R_predicted expSO3(phi) (MotionPrediction::covariance's rotation part).
+  const Eigen::Matrix3d R_predicted_world = prediction.T_world_camera.linear().transpose();
+  const auto mahalanobis = [&](const Pose& T) {
+    const Eigen::Vector3d phi = logSO3(R_predicted_world * T.linear());
+    return std::sqrt(std::max(0.0, phi.dot(llt.solve(phi))));
+  };
+  const double aligned = mahalanobis(T_world_aligned);
+  return aligned > sigmas && mahalanobis(T_world_feature) <= 0.5 * aligned;
+}
+
 }  // namespace vkloc

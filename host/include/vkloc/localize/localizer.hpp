@@ -268,6 +268,17 @@ struct LocalizerOptions {
   /// repeated facade, leaves most matches out). Otherwise it is verified as any other start.
   int motion_search_feature_min_inliers = 30;
   double motion_search_feature_min_inlier_fraction = 0.5;
+  /// On the first frame after a start at an unknown velocity (the pose taken sets the filter's
+  /// velocity), an agreeing pair as above keeps the feature pose rather than the alignment's when
+  /// the gyro's attitude says the alignment slid: the alignment's own attitude (without the
+  /// filter's prior) is more than this many sigmas of the prediction's attitude from it, and the
+  /// feature pose's at most half as far. A model that lacks the texture the image has (geometry
+  /// only, a plain whiteboard's border beside its drawn strokes) has its edge minimum off the
+  /// truth along the valley where a turn trades for a translation across the view; the two
+  /// camera images' features are not fooled by the model (cycles-room with scene_untextured.obj:
+  /// the alignment 4.9 cm and 0.40 deg off the gyro, the feature pose 0.8 cm and 0.09 deg; the
+  /// velocity taken from the alignment was 1 m/s wrong). 0 = always the alignment's.
+  double motion_search_feature_attitude_sigmas = 2.5;
   /// The motion search keeps the best verified result of its starts and stops at one whose
   /// verification score reaches this (true poses of the development sequences score 0.5-1);
   /// while the prior's velocity is unobserved, at motion_search_start_score if higher.
