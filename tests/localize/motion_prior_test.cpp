@@ -513,6 +513,9 @@ TEST(FeatureStart, TheGyrosAttitudeSidesWithTheFeaturePoseOnlyWhenTheAlignmentTu
   EXPECT_FALSE(attitudeFavoursFeaturePose(prediction, turned(0.09, y), turned(0.20, y), 2.5));  // 2 sigmas: within
   EXPECT_FALSE(
       attitudeFavoursFeaturePose(prediction, turned(0.25, y), turned(0.40, y), 2.5));  // feature not nearer by half
+  // A feature pose beyond half the sigmas does not side with the gyro, however far the alignment.
+  EXPECT_TRUE(attitudeFavoursFeaturePose(prediction, turned(0.12, y), turned(1.0, y), 2.5));   // 1.2 sigmas
+  EXPECT_FALSE(attitudeFavoursFeaturePose(prediction, turned(0.13, y), turned(1.0, y), 2.5));  // 1.3 sigmas
   EXPECT_FALSE(
       attitudeFavoursFeaturePose(prediction, turned(0.79, y), turned(0.05, y), 2.5));  // the feature pose turned
   // The covariance's shape counts: 0.4 deg about an axis the gyro knows to 0.5 deg is nothing.

@@ -429,7 +429,7 @@ bool attitudeFavoursFeaturePose(const MotionPrediction& prediction, const Pose& 
     return std::sqrt(std::max(0.0, phi.dot(llt.solve(phi))));
   };
   const double aligned = mahalanobis(T_world_aligned);
-  return aligned > sigmas && mahalanobis(T_world_feature) <= 0.5 * aligned;
+  return aligned > sigmas && mahalanobis(T_world_feature) <= 0.5 * std::min(aligned, sigmas);
 }
 
 }  // namespace vkloc

@@ -336,7 +336,7 @@ bool refusalCountsAgainstPrior(double score, const std::vector<double>& taken_sc
 /// pose against an alignment that agrees with it in position
 /// (LocalizerOptions::motion_search_feature_attitude_sigmas): the alignment's attitude is more
 /// than `sigmas` from the prediction's in the Mahalanobis distance of the prediction's rotation
-/// covariance, and the feature pose's at most half as far. False for a prediction that is not
+/// covariance, and the feature pose's within `sigmas` / 2. False for a prediction that is not
 /// inertial, a rotation covariance that is not positive definite or `sigmas` <= 0.
 bool attitudeFavoursFeaturePose(const MotionPrediction& prediction, const Pose& T_world_feature,
                                 const Pose& T_world_aligned, double sigmas);
