@@ -78,6 +78,26 @@ function(track_starts sequence frames starts)
   set(start_failures "${start_failures}" PARENT_SCOPE)
 endfunction()
 
+# Appends to `failures` (in the caller) what a whole run's figures break: frames lost (and, with
+# `no_inertial`, bridged by the IMU alone), a median translation above 0.3 % of the median scene
+# depth, a largest one above `max_ratio` times it.
+function(check_run lost inertial median_m max_m depth_m max_ratio no_inertial)
+  if(no_inertial)
+    set(lost_rule "if (${lost} != 0 || ${inertial} != 0) bad = bad \" lost ${lost}, inertial only ${inertial};\";")
+  else()
+    set(lost_rule "if (${lost} != 0) bad = bad \" lost ${lost};\";")
+  endif()
+  execute_process(
+    COMMAND awk "BEGIN { d = ${depth_m}; bad = \"\"; ${lost_rule}
+      if (${median_m} > 0.003 * d) bad = bad \" median ${median_m} m > 0.3 % of depth;\";
+      if (${max_m} > ${max_ratio} * d) bad = bad \" largest error ${max_m} m > ${max_ratio} x depth;\";
+      print bad }"
+    OUTPUT_VARIABLE bad OUTPUT_STRIP_TRAILING_WHITESPACE)
+  if(NOT bad STREQUAL "")
+    set(failures "${failures}${bad}\n" PARENT_SCOPE)
+  endif()
+endfunction()
+
 set(failures "")
 if(CASE MATCHES "_starts(_db)?$")
   set(db_args "")
@@ -130,16 +150,7 @@ elseif(CASE MATCHES "_third$")
   endforeach()
   message(STATUS "${CASE}: ${frames} frames, lost ${lost}, inertial only ${inertial}, translation median "
                  "${translation_median_m} m max ${translation_max_m} m, scene depth ${scene_depth_median_m} m")
-  execute_process(
-    COMMAND awk "BEGIN { d = ${scene_depth_median_m}; bad = \"\";
-      if (${lost} != 0 || ${inertial} != 0) bad = bad \" lost ${lost}, inertial only ${inertial};\";
-      if (${translation_median_m} > 0.003 * d) bad = bad \" median ${translation_median_m} m > 0.3 % of depth;\";
-      if (${translation_max_m} > 0.02 * d) bad = bad \" largest error ${translation_max_m} m > 2 % of depth;\";
-      print bad }"
-    OUTPUT_VARIABLE bad OUTPUT_STRIP_TRAILING_WHITESPACE)
-  if(NOT bad STREQUAL "")
-    string(APPEND failures "${bad}\n")
-  endif()
+  check_run(${lost} ${inertial} ${translation_median_m} ${translation_max_m} ${scene_depth_median_m} 0.02 TRUE)
   track_starts(${third} 10 "0;3;6;9;12;15;18;21;24;27;30")
   set(wanted ${count})
   message(STATUS "${CASE}: ${passed} of ${count} starts tracked all 10 frames within 2 % of the depth (wanted ${wanted})")
@@ -180,16 +191,7 @@ elseif(CASE MATCHES "_untextured$")
   else()
     set(max_ratio 0.02)
   endif()
-  execute_process(
-    COMMAND awk "BEGIN { d = ${scene_depth_median_m}; bad = \"\";
-      if (${lost} != 0) bad = bad \" lost ${lost};\";
-      if (${translation_median_m} > 0.003 * d) bad = bad \" median ${translation_median_m} m > 0.3 % of depth;\";
-      if (${translation_max_m} > ${max_ratio} * d) bad = bad \" largest error ${translation_max_m} m;\";
-      print bad }"
-    OUTPUT_VARIABLE bad OUTPUT_STRIP_TRAILING_WHITESPACE)
-  if(NOT bad STREQUAL "")
-    string(APPEND failures "${bad}\n")
-  endif()
+  check_run(${lost} 0 ${translation_median_m} ${translation_max_m} ${scene_depth_median_m} ${max_ratio} FALSE)
 elseif(CASE MATCHES "_no_imu$")
   set(dir ${WORK}/${CASE})
   file(REMOVE_RECURSE ${dir})
@@ -209,16 +211,7 @@ elseif(CASE MATCHES "_no_imu$")
   message(STATUS "${CASE}: ${frames} frames, lost ${lost}, translation median ${translation_median_m} m max "
                  "${translation_max_m} m, rotation median ${rotation_median_deg} deg, scene depth "
                  "${scene_depth_median_m} m")
-  execute_process(
-    COMMAND awk "BEGIN { d = ${scene_depth_median_m}; bad = \"\";
-      if (${lost} != 0) bad = bad \" lost ${lost};\";
-      if (${translation_median_m} > 0.003 * d) bad = bad \" median ${translation_median_m} m > 0.3 % of depth;\";
-      if (${translation_max_m} > ${max_ratio} * d) bad = bad \" largest error ${translation_max_m} m;\";
-      print bad }"
-    OUTPUT_VARIABLE bad OUTPUT_STRIP_TRAILING_WHITESPACE)
-  if(NOT bad STREQUAL "")
-    string(APPEND failures "${bad}\n")
-  endif()
+  check_run(${lost} 0 ${translation_median_m} ${translation_max_m} ${scene_depth_median_m} ${max_ratio} FALSE)
 else()
   foreach(mode worker sync)
     set(dir ${WORK}/${CASE}_${mode})
