@@ -305,8 +305,9 @@ TEST(Localizer, AFarFrameAfterAnUnknownVelocityStartIsFoundFromPointFeatures) {
 }
 
 TEST(Localizer, MotionSearchFeatureAgreementOutOfRangeIsRefused) {
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < 6; ++k) {
     LocalizerOptions options;
+    if (k == 5) options.motion_search_feature_attitude_sigmas = std::numeric_limits<double>::quiet_NaN();
     if (k == 3) options.motion_search_feature_attitude_sigmas = -1.0;
     if (k == 4) options.motion_search_feature_attitude_sigmas = std::numeric_limits<double>::infinity();
     if (k == 0) options.motion_search_feature_min_inliers = 3;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "vkloc/core/se3.hpp"
@@ -499,7 +500,7 @@ TEST(PriorRestart, ARefusedPoseCountsWhenConfidentOrBetterThanWhatThePriorTook) 
 TEST(FeatureStart, TheGyrosAttitudeSidesWithTheFeaturePoseOnlyWhenTheAlignmentTurnedAway) {
   MotionPrediction prediction;
   prediction.inertial = true;
-  prediction.T_world_camera = poseAt(1.0, 0);
+  prediction.T_world_camera = poseAt(1.0, 90);  // turned, so that camera and world axes differ
   const double sigma_rad = 0.1 * EIGEN_PI / 180.0;
   prediction.covariance.bottomRightCorner<3, 3>() = sigma_rad * sigma_rad * Eigen::Matrix3d::Identity();
   const auto turned = [&](double deg, const Eigen::Vector3d& axis) {
@@ -529,6 +530,10 @@ TEST(FeatureStart, TheGyrosAttitudeSidesWithTheFeaturePoseOnlyWhenTheAlignmentTu
   MotionPrediction not_inertial = prediction;
   not_inertial.inertial = false;
   EXPECT_FALSE(attitudeFavoursFeaturePose(not_inertial, turned(0.09, y), turned(0.40, y), 2.5));
+  Pose not_finite = turned(0.09, y);
+  not_finite.linear()(0, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(attitudeFavoursFeaturePose(prediction, not_finite, turned(0.40, y), 2.5));
+  EXPECT_FALSE(attitudeFavoursFeaturePose(prediction, turned(0.09, y), not_finite, 2.5));
   MotionPrediction no_covariance = prediction;
   no_covariance.covariance.setZero();
   EXPECT_FALSE(attitudeFavoursFeaturePose(no_covariance, turned(0.09, y), turned(0.40, y), 2.5));

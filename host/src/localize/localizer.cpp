@@ -597,8 +597,11 @@ struct Localizer::Impl {
         if (agreed && prediction.velocity_unobserved &&
             attitudeFavoursFeaturePose(prediction, start, filterPose(*r),
                                        options.motion_search_feature_attitude_sigmas)) {
+          // The feature pose replaces the pose; the alignment's quality and covariance stay as the
+          // figures of a pose within the agreement's bounds of it (verification, the filter's weight).
           r->T_world_camera = start;
           r->T_world_camera_edges = start;
+          r->T_camera_ref = start.inverse() * keyframes->current()->reference.T_world_ref;
         }
         if (agreed) return std::move(r).value();
         if (consider(std::move(r).value())) return std::move(*best);

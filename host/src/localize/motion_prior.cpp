@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "vkloc/core/numeric.hpp"
 #include "vkloc/core/se3.hpp"
@@ -424,12 +425,13 @@ bool attitudeFavoursFeaturePose(const MotionPrediction& prediction, const Pose& 
   if (!C.allFinite() || llt.info() != Eigen::Success) return false;
   // phi with R_x = R_predicted expSO3(phi) (MotionPrediction::covariance's rotation part).
   const Eigen::Matrix3d R_predicted_world = prediction.T_world_camera.linear().transpose();
+  // sqrt(phi^T C^-1 phi); NaN for a pose that is not finite (then false below).
   const auto mahalanobis = [&](const Pose& T) {
+    if (!T.matrix().allFinite()) return std::numeric_limits<double>::quiet_NaN();
     const Eigen::Vector3d phi = logSO3(R_predicted_world * T.linear());
-    return std::sqrt(std::max(0.0, phi.dot(llt.solve(phi))));
+    return std::sqrt(phi.dot(llt.solve(phi)));
   };
-  const double aligned = mahalanobis(T_world_aligned);
-  return aligned > sigmas && mahalanobis(T_world_feature) <= 0.5 * std::min(aligned, sigmas);
+  return mahalanobis(T_world_aligned) > sigmas && mahalanobis(T_world_feature) <= 0.5 * sigmas;
 }
 
 }  // namespace vkloc

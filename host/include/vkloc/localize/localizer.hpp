@@ -268,19 +268,16 @@ struct LocalizerOptions {
   /// repeated facade, leaves most matches out). Otherwise it is verified as any other start.
   int motion_search_feature_min_inliers = 30;
   double motion_search_feature_min_inlier_fraction = 0.5;
-  /// On the first frame after a start at an unknown velocity (the pose taken sets the filter's
-  /// velocity), an agreeing pair as above keeps the feature pose rather than the alignment's when
-  /// the gyro's attitude says the alignment slid: the alignment's own attitude (without the
-  /// filter's prior) is more than this many sigmas of the prediction's attitude from it
-  /// (Mahalanobis, the prediction's rotation covariance), and the feature pose's within half as
-  /// many. A model that lacks the texture the image has (geometry
-  /// only, a plain whiteboard's border beside its drawn strokes) has its edge minimum off the
-  /// truth along the valley where a turn trades for a translation across the view; the two
-  /// camera images' features are not fooled by the model (cycles-room with scene_untextured.obj:
-  /// the alignment 4.9 cm off and 3.3 sigmas from the gyro, the feature pose 0.8 cm and 0.7
-  /// sigmas; the velocity taken from the alignment was 1 m/s wrong). On textured models the
-  /// alignment is the nearer (the development sequences and their copies: 0.2-1.6 sigmas against
-  /// the feature pose's 0.6-7.9). 0 = always the alignment's.
+  /// While the prior's velocity is unobserved (the first frame after a start or a restart at an
+  /// unknown velocity: the pose taken sets the filter's velocity), an agreeing pair as above keeps
+  /// the feature pose rather than the alignment's when the gyro sides with it
+  /// (attitudeFavoursFeaturePose: the alignment's own attitude, without the filter's prior, more
+  /// than this many sigmas of the prediction's attitude from it, the feature pose's within half as
+  /// many). An edge alignment on a model that lacks the image's texture (geometry only) can end
+  /// off the truth along the valley where a turn trades for a translation across the view; two
+  /// camera images' features are not misled by the model. The feature pose carries the previous
+  /// pose's error, as the gyro's prediction does: the velocity between the two is the camera's
+  /// even then. 0 = always the alignment's (measured: README, "The pose a frame reports").
   double motion_search_feature_attitude_sigmas = 2.5;
   /// The motion search keeps the best verified result of its starts and stops at one whose
   /// verification score reaches this (true poses of the development sequences score 0.5-1);

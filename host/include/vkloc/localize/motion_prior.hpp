@@ -333,11 +333,12 @@ bool refusalCountsAgainstPrior(double score, const std::vector<double>& taken_sc
                                double restart_min_score, double min_score);
 
 /// Whether the prediction's attitude (an inertial prediction's: the gyro's) sides with a feature
-/// pose against an alignment that agrees with it in position
-/// (LocalizerOptions::motion_search_feature_attitude_sigmas): the alignment's attitude is more
-/// than `sigmas` from the prediction's in the Mahalanobis distance of the prediction's rotation
-/// covariance, and the feature pose's within `sigmas` / 2. False for a prediction that is not
-/// inertial, a rotation covariance that is not positive definite or `sigmas` <= 0.
+/// pose against an alignment (LocalizerOptions::motion_search_feature_attitude_sigmas): with phi
+/// = logSO3(R_predicted^T R_x) (MotionPrediction::covariance's rotation part, camera frame) and C
+/// the prediction's rotation covariance, sqrt(phi^T C^-1 phi) is above `sigmas` for the
+/// alignment and at most `sigmas` / 2 for the feature pose. False for a prediction that is not
+/// inertial, a rotation covariance that is not finite and positive definite, `sigmas` <= 0 or a
+/// pose that is not finite.
 bool attitudeFavoursFeaturePose(const MotionPrediction& prediction, const Pose& T_world_feature,
                                 const Pose& T_world_aligned, double sigmas);
 
