@@ -78,6 +78,24 @@ function(track_starts sequence frames starts)
   set(start_failures "${start_failures}" PARENT_SCOPE)
 endfunction()
 
+# Tracks all of `sequence` from its first ground-truth pose (synchronous keyframes, EKF) and sets,
+# in the caller, its report's frames, lost, inertial, scene_depth_median_m, translation_median_m
+# and translation_max_m.
+function(track_whole sequence)
+  set(dir ${WORK}/${CASE})
+  file(REMOVE_RECURSE ${dir})
+  run("track ${CASE}" ${VKLOC} track --sequence ${sequence} --out ${dir}/t.txt --report ${dir}/report
+      --keyframes sync --filter ekf --quiet)
+  set(j ${dir}/report/track.json)
+  foreach(key frames lost inertial scene_depth_median_m translation_median_m translation_max_m)
+    json_number(value ${j} ${key})
+    set(${key} ${value} PARENT_SCOPE)
+    set(${key} ${value})
+  endforeach()
+  message(STATUS "${CASE}: ${frames} frames, lost ${lost}, inertial only ${inertial}, translation median "
+                 "${translation_median_m} m max ${translation_max_m} m, scene depth ${scene_depth_median_m} m")
+endfunction()
+
 # Appends to `failures` (in the caller) what a whole run's figures break: frames lost (and, with
 # `no_inertial`, bridged by the IMU alone), a median translation above 0.3 % of the median scene
 # depth, a largest one above `max_ratio` times it.
@@ -149,16 +167,7 @@ elseif(CASE MATCHES "_third$")
     math(EXPR index "${index} + 1")
   endforeach()
   file(WRITE ${third}/images.txt "${kept}")
-  set(dir ${WORK}/${CASE})
-  file(REMOVE_RECURSE ${dir})
-  run("track ${CASE}" ${VKLOC} track --sequence ${third} --out ${dir}/t.txt --report ${dir}/report --keyframes sync
-      --filter ekf --quiet)
-  set(j ${dir}/report/track.json)
-  foreach(key frames lost inertial scene_depth_median_m translation_median_m translation_max_m)
-    json_number(${key} ${j} ${key})
-  endforeach()
-  message(STATUS "${CASE}: ${frames} frames, lost ${lost}, inertial only ${inertial}, translation median "
-                 "${translation_median_m} m max ${translation_max_m} m, scene depth ${scene_depth_median_m} m")
+  track_whole(${third})
   check_run(${lost} ${inertial} ${translation_median_m} ${translation_max_m} ${scene_depth_median_m} 0.02 TRUE)
   track_starts(${third} 10 "0;3;6;9;12;15;18;21;24;27;30")
   set(wanted ${count})
@@ -185,16 +194,7 @@ elseif(CASE MATCHES "_untextured$")
   foreach(f camera.yaml groundtruth.txt imu.csv images.txt images model)
     file(CREATE_LINK ${seq}/${f} ${untextured}/${f} SYMBOLIC)
   endforeach()
-  set(dir ${WORK}/${CASE})
-  file(REMOVE_RECURSE ${dir})
-  run("track ${CASE}" ${VKLOC} track --sequence ${untextured} --out ${dir}/t.txt --report ${dir}/report
-      --keyframes sync --filter ekf --quiet)
-  set(j ${dir}/report/track.json)
-  foreach(key frames lost inertial scene_depth_median_m translation_median_m translation_max_m)
-    json_number(${key} ${j} ${key})
-  endforeach()
-  message(STATUS "${CASE}: ${frames} frames, lost ${lost}, inertial only ${inertial}, translation median "
-                 "${translation_median_m} m max ${translation_max_m} m, scene depth ${scene_depth_median_m} m")
+  track_whole(${untextured})
   if(scene STREQUAL "room")
     set(max_ratio 0.2)
   else()
