@@ -265,9 +265,11 @@ TEST(KeyframeDatabase, SavedFileLoadsAndDamagedOrForeignFilesAreRefused) {
   EXPECT_EQ(KeyframeDatabase::load(tempPath("missing")).error().code, ErrorCode::kNotFound);
 }
 
-std::unique_ptr<Localizer> relocalizer(KeyframeThreading threading) {
+/// confident_score >= 0 replaces LocalizerOptions::motion_search_confident_score.
+std::unique_ptr<Localizer> relocalizer(KeyframeThreading threading, double confident_score = -1) {
   LocalizerOptions options;
   options.keyframe_threading = threading;
+  if (confident_score >= 0) options.motion_search_confident_score = confident_score;
   auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
   EXPECT_TRUE(created.ok()) << created.error().message;
   if (!created.ok()) return nullptr;
@@ -409,6 +411,51 @@ TEST(Relocalization, WithoutTheImuAStartPoseIsReportedAtOnce) {
   EXPECT_EQ(r->state, TrackingState::kRelocalized);
   EXPECT_FALSE(r->confirming);
   EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(0)), 5e-3);
+}
+
+TEST(Relocalization, WithoutTheImuTheFrameAfterARelocalizedOneIsTakenOnlyWhenConfidentlyVerified) {
+  // No IMU: the frame after a relocalized one is aligned from that pose with no motion to go by.
+  // Clutter drawn over it (seeded strokes) lowers its verification score below the confident
+  // one: it is not tracked but searched again. The control, the rule off (the confident score
+  // set to tracking's), tracks it.
+  ImageU8 cluttered = asymmetricFrame(1);
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> x(0, cluttered.width - 1), y(0, cluttered.height - 1), gray(0, 255);
+  for (int k = 0; k < 120; ++k) {
+    const int x0 = x(rng), y0 = y(rng), x1 = x(rng), y1 = y(rng);
+    const uint8_t value = static_cast<uint8_t>(gray(rng));
+    const int n = std::max(std::abs(x1 - x0), std::abs(y1 - y0)) + 1;
+    for (int i = 0; i < n; ++i) {
+      const int u = x0 + (x1 - x0) * i / n, v = y0 + (y1 - y0) * i / n;
+      cluttered.at(u, v) = value;
+      if (u + 1 < cluttered.width) cluttered.at(u + 1, v) = value;
+    }
+  }
+  const LocalizerOptions defaults;
+  for (const bool rule : {true, false}) {
+    auto localizer = relocalizer(KeyframeThreading::kSynchronous, rule ? -1.0 : defaults.verification.min_score);
+    ASSERT_TRUE(localizer);
+    ASSERT_TRUE(localizer->startSearch(SearchRegion{test::localizeTruth(0).translation(), 1.0}).ok());
+    const Result<LocalizationResult> first = localizer->localize(0, asymmetricFrame(0));
+    ASSERT_TRUE(first.ok()) << first.error().message;
+    ASSERT_EQ(first->state, TrackingState::kRelocalized);
+    const Result<LocalizationResult> next = localizer->localize(50'000'000, cluttered);
+    ASSERT_TRUE(next.ok()) << next.error().message;
+    // The plain alignment's pose is near the truth but verifies between the two scores.
+    EXPECT_GE(next->verify_score, defaults.verification.min_score);
+    EXPECT_LT(next->verify_score, defaults.motion_search_confident_score);
+    if (!rule) {
+      EXPECT_EQ(next->state, TrackingState::kTracking);
+      continue;
+    }
+    EXPECT_NE(next->state, TrackingState::kTracking) << "score " << next->verify_score;
+    EXPECT_GT(next->relocalization_candidates, 0) << "the frame is searched again";
+    // A clean frame after it is found again.
+    const Result<LocalizationResult> after = localizer->localize(100'000'000, asymmetricFrame(2));
+    ASSERT_TRUE(after.ok()) << after.error().message;
+    EXPECT_TRUE(after->state == TrackingState::kTracking || after->state == TrackingState::kRelocalized);
+    EXPECT_LT(test::translationError(after->T_world_camera, test::localizeTruth(2)), 5e-3);
+  }
 }
 
 TEST(Relocalization, RecoversAfterBlackFramesAndAJumpWithoutSearchingBlackOnes) {

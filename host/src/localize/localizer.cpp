@@ -1645,8 +1645,18 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   out.keyframe_age_frames = m.frame_index - keyframe.request.frame_index;
   // With a database to relocalize from, a pose is taken only when it is verified: an alignment
   // that locked onto wrong edges (after a loss, a jump, a wrong prediction) goes to the search
-  // instead of being tracked on.
-  if (m.database && track.state == TrackingState::kTracking && out.verify_score < m.options.verification.min_score) {
+  // instead of being tracked on. On the frame after a relocalized one with no IMU, the plain
+  // alignment starts from that pose with no motion to go by (the velocity is unobserved), as the
+  // motion search's starts do: it is taken only at motion_search_confident_score, else the frame
+  // is searched again (the room after a 3 m jump: the frame after a relocalized one slid 0.34 m
+  // across a window's plain frame and verified at 0.28).
+  const bool blind_after_relocalized = m.database && prediction && !prediction->inertial &&
+                                       prediction->velocity_unobserved && previous_t_ns &&
+                                       m.last_relocalized_t_ns == previous_t_ns;
+  const double min_taken_score =
+      blind_after_relocalized ? std::max(m.options.verification.min_score, m.options.motion_search_confident_score)
+                              : m.options.verification.min_score;
+  if (m.database && track.state == TrackingState::kTracking && out.verify_score < min_taken_score) {
     track.state = TrackingState::kLost;
     out.state = TrackingState::kLost;
   }
