@@ -446,6 +446,7 @@ TEST(Relocalization, WithoutTheImuTheFrameAfterARelocalizedOneIsTakenOnlyWhenCon
     EXPECT_LT(next->verify_score, defaults.motion_search_confident_score);
     if (!rule) {
       EXPECT_EQ(next->state, TrackingState::kTracking);
+      EXPECT_LT(test::translationError(next->T_world_camera, test::localizeTruth(1)), 0.01);
       continue;
     }
     EXPECT_NE(next->state, TrackingState::kTracking) << "score " << next->verify_score;
