@@ -409,6 +409,13 @@ struct Localizer::Impl {
     return prior;
   }
 
+  /// The verification score a pose needs: tracking's, or while the motion prior's velocity is
+  /// unobserved (the pose taken sets it) at least motion_search_confident_score.
+  double minTakenScore(bool velocity_unobserved) const {
+    return velocity_unobserved ? std::max(options.verification.min_score, options.motion_search_confident_score)
+                               : options.verification.min_score;
+  }
+
   /// Inliers on the finest level of a result (0 unless tracked).
   static double finestInliers(const TrackResult& r) {
     return r.state == TrackingState::kTracking ? r.quality.inlier_ratio * r.quality.points_in_image : 0.0;
@@ -508,9 +515,7 @@ struct Localizer::Impl {
     // start that converged only part of the way, on a near wall beside a far facade, would carry
     // its error on): until a second pose has pinned the velocity down, a searched pose must be
     // verified with motion_search_confident_score.
-    const double min_score = prediction.velocity_unobserved
-                                 ? std::max(verification.min_score, options.motion_search_confident_score)
-                                 : verification.min_score;
+    const double min_score = minTakenScore(prediction.velocity_unobserved);
     // While the velocity is unobserved the pose taken sets it: the search goes on past a merely
     // confident pose (a look-alike a period along a repetitive street verifies at 0.6-0.7).
     const double stop_score = prediction.velocity_unobserved
@@ -1650,13 +1655,10 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // motion search's starts do: it is taken only at motion_search_confident_score, else the frame
   // is searched again (the room after a 3 m jump: the frame after a relocalized one slid 0.34 m
   // across a window's plain frame and verified at 0.28).
-  const bool blind_after_relocalized = m.database && prediction && !prediction->inertial &&
-                                       prediction->velocity_unobserved && previous_t_ns &&
-                                       m.last_relocalized_t_ns == previous_t_ns;
-  const double min_taken_score =
-      blind_after_relocalized ? std::max(m.options.verification.min_score, m.options.motion_search_confident_score)
-                              : m.options.verification.min_score;
-  if (m.database && track.state == TrackingState::kTracking && out.verify_score < min_taken_score) {
+  const bool blind_after_relocalized = prediction && !prediction->inertial && prediction->velocity_unobserved &&
+                                       previous_t_ns && m.last_relocalized_t_ns == previous_t_ns;
+  if (m.database && track.state == TrackingState::kTracking &&
+      out.verify_score < m.minTakenScore(blind_after_relocalized)) {
     track.state = TrackingState::kLost;
     out.state = TrackingState::kLost;
   }
