@@ -242,7 +242,7 @@ void runQueries(const Setup& s, const RelocBenchArgs& a) {
 
 void runLossTrials(const Setup& s, const RelocBenchArgs& a) {
   // Forced loss: track from a seeded start frame with the IMU; after 1 s the images go black for
-  // black_s (or, for a jump, the frames skip ahead to where the camera is jump_m away); count
+  // black_s (or, for a jump, the frames skip to where the camera is jump_m away); count
   // the frames from the first usable image to a verified pose again.
   const int64_t frame_ns = s.seq.images.size() > 1 ? s.seq.images[1].t_ns - s.seq.images[0].t_ns : 50'000'000;
   const size_t lead = static_cast<size_t>(std::llround(1e9 / static_cast<double>(frame_ns)));
@@ -250,39 +250,55 @@ void runLossTrials(const Setup& s, const RelocBenchArgs& a) {
   // Frames without an image to use after the loss starts: the black ones (none for a jump).
   const size_t gap = a.loss == "black" ? black : 0;
   Xoshiro256 rng(a.seed);
-  size_t ok = 0, wrong_trials = 0, skipped = 0;
+  size_t ok = 0, wrong_trials = 0, skipped = 0, redrawn = 0;
   std::vector<double> frames_to_recover;
   for (int trial = 0; trial < a.trials; ++trial) {
     auto tracker = makeLocalizer(s, a, true);
     const size_t span = lead + black + 6;
     if (s.seq.images.size() <= span + 1) throw Failure{"the sequence is too short for forced-loss trials"};
-    size_t start = static_cast<size_t>(rng.uniform(0.0, static_cast<double>(s.seq.images.size() - span - 1)));
-    // A jump: the frames after the loss come from where the camera is jump_m from the last one.
-    size_t resume = start + lead + (a.loss == "black" ? black : 1);
-    const std::optional<Pose> T0 = groundTruthAt(s.seq.groundtruth, s.seq.images[start].t_ns);
-    const std::optional<Pose> loss_pose = groundTruthAt(s.seq.groundtruth, s.seq.images[start + lead].t_ns);
-    if (!T0 || !loss_pose) {  // no ground truth to start from or to measure the jump from
-      ++skipped;
-      continue;
-    }
-    if (a.loss == "jump") {
-      const Pose& at_loss = *loss_pose;
-      size_t k = resume;
-      while (k + 6 < s.seq.images.size()) {
-        const std::optional<Pose> p = groundTruthAt(s.seq.groundtruth, s.seq.images[k].t_ns);
-        if (p && (p->translation() - at_loss.translation()).norm() >= a.jump_m) break;
-        ++k;
-      }
-      if (k + 6 >= s.seq.images.size()) {
-        ++skipped;
+    // A start with ground truth at it and at the loss and, for a jump, a frame jump_m from the
+    // camera at the loss: the first after it or, where the sequence has none ahead, the last
+    // before it (a jump back along the path). Starts without one are drawn again.
+    size_t start = 0, resume = 0;
+    std::optional<Pose> T0;
+    for (int draw = 0; draw < 1000 && !T0; ++draw) {
+      start = static_cast<size_t>(rng.uniform(0.0, static_cast<double>(s.seq.images.size() - span - 1)));
+      resume = start + lead + (a.loss == "black" ? black : 1);
+      const std::optional<Pose> at_start = groundTruthAt(s.seq.groundtruth, s.seq.images[start].t_ns);
+      const std::optional<Pose> at_loss = groundTruthAt(s.seq.groundtruth, s.seq.images[start + lead].t_ns);
+      if (!at_start || !at_loss) {
+        ++redrawn;
         continue;
       }
-      resume = k;
+      if (a.loss == "jump") {
+        auto far_enough = [&](size_t k) {
+          const std::optional<Pose> p = groundTruthAt(s.seq.groundtruth, s.seq.images[k].t_ns);
+          return p && (p->translation() - at_loss->translation()).norm() >= a.jump_m;
+        };
+        std::optional<size_t> to;
+        for (size_t k = resume; k + 6 < s.seq.images.size() && !to; ++k) {
+          if (far_enough(k)) to = k;
+        }
+        for (size_t k = start + lead; k-- > 0 && !to;) {
+          if (far_enough(k)) to = k;
+        }
+        if (!to) {
+          ++redrawn;
+          continue;
+        }
+        resume = *to;
+      }
+      T0 = at_start;
+    }
+    if (!T0) {
+      ++skipped;
+      continue;
     }
     tracker->reset(*T0);
     size_t next_imu = 0;
     int recovered_after = -1;
     bool accepted_wrong = false;
+    std::string wrong_what;
     // Frame times run on without a gap (a jump is a jump in space, not in time).
     for (size_t f = 0; f < lead + black + 6; ++f) {
       size_t i = start + f;
@@ -309,26 +325,30 @@ void runLossTrials(const Setup& s, const RelocBenchArgs& a) {
       const double depth = r.scene_depth_m > 0 ? r.scene_depth_m : 1.0;
       if (t_err <= a.goal_fraction * depth && r_err <= a.goal_deg) {
         if (recovered_after < 0) recovered_after = static_cast<int>(f - lead - gap);
-      } else {
+      } else if (!accepted_wrong) {
         accepted_wrong = true;
+        wrong_what = fmt::format(" ({:.3f} m, {:.2f} deg off at usable frame {} (image {}), {})", t_err, r_err,
+                                 f - lead - gap + 1, i, trackingStateName(r.state));
       }
     }
     if (recovered_after >= 0 && recovered_after < 3 && !accepted_wrong) ++ok;
     wrong_trials += accepted_wrong;
     frames_to_recover.push_back(recovered_after < 0 ? INFINITY : recovered_after + 1);
     std::fprintf(stderr, "bench reloc: trial %d/%d: start frame %zu, verified again at usable frame %d%s\n", trial + 1,
-                 a.trials, start, recovered_after < 0 ? -1 : recovered_after + 1, accepted_wrong ? ", WRONG pose" : "");
+                 a.trials, start, recovered_after < 0 ? -1 : recovered_after + 1,
+                 accepted_wrong ? (", WRONG pose" + wrong_what).c_str() : "");
   }
   const size_t done = frames_to_recover.size();
   std::printf(
       "%s: forced loss (%s): verified again within 3 frames of the first usable image in %zu of %zu trials (%.1f %%), "
-      "trials with a wrong pose accepted %zu, median frames to recover %.0f%s\n",
+      "trials with a wrong pose accepted %zu, median frames to recover %.0f%s%s\n",
       s.seq.name.c_str(),
       a.loss == "black" ? fmt::format("{:.1f} s of black frames", a.black_s).c_str()
                         : fmt::format("jump of {:.1f} m", a.jump_m).c_str(),
       ok, done, done > 0 ? 100.0 * static_cast<double>(ok) / static_cast<double>(done) : 0.0, wrong_trials,
       percentile(frames_to_recover, 0.5),
-      skipped > 0 ? fmt::format(" ({} trials skipped: no such jump or no ground truth)", skipped).c_str() : "");
+      skipped > 0 ? fmt::format(" ({} trials skipped: no such jump or no ground truth)", skipped).c_str() : "",
+      redrawn > 0 ? fmt::format(" ({} starts drawn again: no such jump or no ground truth)", redrawn).c_str() : "");
 }
 
 /// Global initialization: at a seeded frame the localizer has no pose, only a prior position drawn

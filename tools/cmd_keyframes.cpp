@@ -29,6 +29,8 @@ struct BuildArgs {
   std::string volume;  ///< "x0,y0,z0,x1,y1,z1", metres; default: the ground truth's box + margin.
   double margin_m = 1.0;
   double spacing_m = 1.0;
+  double corridor_m = 0;  ///< Radius of the corridor around the path, metres; 0: the whole box.
+  std::string path;       ///< TUM trajectory: the corridor's path (default: the sequence's ground truth).
   int headings = 12;
   std::string tilts;  ///< Degrees below the horizon, comma-separated; default: the ground truth's.
   double tilt_step_deg = 15.0;
@@ -70,11 +72,37 @@ void runBuild(const BuildArgs& a) {
   }
   if (!(placement.up_world.norm() > 0)) throw Failure{"--up: need a non-zero vector"};
   placement.up_world.normalize();
+  // A corridor: the positions within corridor_m of a path (a flight plan; the sequence's ground
+  // truth stands in for one by default).
+  if (a.corridor_m > 0) {
+    if (!a.path.empty()) {
+      for (const StampedPose& p : take(loadTumTrajectory(a.path)))
+        placement.corridor.push_back(p.T_world_camera.translation());
+    } else if (seq && !seq->groundtruth.empty()) {
+      for (const StampedPose& p : seq->groundtruth) placement.corridor.push_back(p.T_world_camera.translation());
+    } else {
+      throw Failure{"--corridor needs a --path or a --sequence with ground truth"};
+    }
+    if (placement.corridor.empty()) throw Failure{fmt::format("--path {}: no pose in the file", a.path)};
+    placement.corridor_radius_m = a.corridor_m;
+  } else if (!a.path.empty()) {
+    throw Failure{"--path is the corridor's path: give --corridor RADIUS too"};
+  }
   if (!a.volume.empty()) {
     const std::vector<double> v = take(parseNumbers(a.volume, "--volume (x0,y0,z0,x1,y1,z1)", 6));
     for (int k = 0; k < 3; ++k) {
       placement.volume.min[k] = static_cast<float>(std::min(v[k], v[k + 3]));
       placement.volume.max[k] = static_cast<float>(std::max(v[k], v[k + 3]));
+    }
+  } else if (!placement.corridor.empty()) {
+    // The corridor's box: its path's with the radius around it.
+    for (const Eigen::Vector3d& c : placement.corridor) {
+      const Eigen::Vector3f t = c.cast<float>();
+      placement.volume.extend(t.data());
+    }
+    for (int k = 0; k < 3; ++k) {
+      placement.volume.min[k] -= static_cast<float>(a.corridor_m);
+      placement.volume.max[k] += static_cast<float>(a.corridor_m);
     }
   } else if (seq && !seq->groundtruth.empty()) {
     // The navigable volume: where the sequence's camera went, with a margin.
@@ -130,10 +158,14 @@ void runBuild(const BuildArgs& a) {
   std::string tilts;
   for (double t : placement.tilts_deg) tilts += fmt::format("{}{:g}", tilts.empty() ? "" : ",", t);
   if (!a.quiet) {
-    std::printf("volume [%.1f %.1f %.1f] .. [%.1f %.1f %.1f] m, spacing %.2f m, %d headings, tilts %s deg; %zu x %s\n",
-                placement.volume.min[0], placement.volume.min[1], placement.volume.min[2], placement.volume.max[0],
-                placement.volume.max[1], placement.volume.max[2], placement.spacing_m, placement.headings,
-                tilts.c_str(), renderers.size(), renderer->describe().c_str());
+    std::printf(
+        "volume [%.1f %.1f %.1f] .. [%.1f %.1f %.1f] m%s, spacing %.2f m, %d headings, tilts %s deg; %zu x %s\n",
+        placement.volume.min[0], placement.volume.min[1], placement.volume.min[2], placement.volume.max[0],
+        placement.volume.max[1], placement.volume.max[2],
+        placement.corridor.empty()
+            ? ""
+            : fmt::format(" within {:g} m of a path of {} poses", a.corridor_m, placement.corridor.size()).c_str(),
+        placement.spacing_m, placement.headings, tilts.c_str(), renderers.size(), renderer->describe().c_str());
     std::fflush(stdout);
   }
   const auto t0 = SteadyClock::now();
@@ -200,6 +232,11 @@ void addKeyframesVerb(CLI::App& app) {
     build->add_option("--margin", args->margin_m, "Margin around the ground truth's box, metres")
         ->check(CLI::Range(0.0, 1e5))
         ->capture_default_str();
+    build
+        ->add_option("--corridor", args->corridor_m,
+                     "Only positions within this radius of a path (--path, else the sequence's ground truth), metres")
+        ->check(CLI::Range(0.0, 1e5));
+    build->add_option("--path", args->path, "The corridor's path: a TUM trajectory (t tx ty tz qx qy qz qw), metres");
     build->add_option("--spacing", args->spacing_m, "Grid spacing, metres")
         ->check(CLI::Range(1e-3, 1e6))
         ->capture_default_str();

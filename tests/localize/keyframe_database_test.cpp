@@ -151,6 +151,73 @@ TEST(KeyframeDatabase, PlacementIsChecked) {
   EXPECT_NE(s.error().message.find("exceed the limit"), std::string::npos) << s.error().message;
 }
 
+TEST(KeyframeDatabase, ACorridorKeepsTheGridPositionsWithinItsRadiusOfThePath) {
+  KeyframePlacement p;
+  p.volume.min = {-5.0f, -5.0f, 0.0f};
+  p.volume.max = {5.0f, 5.0f, 3.0f};
+  p.spacing_m = 0.5;
+  const Result<std::vector<Eigen::Vector3d>> grid = placementPositions(p);
+  ASSERT_TRUE(grid.ok());
+  ASSERT_EQ(grid->size(), 21u * 21u * 7u);  // the whole box without a corridor
+  // An L-shaped path, its legs 7 m and 5 m, sampled every 1 cm as a ground truth would be.
+  const std::vector<Eigen::Vector3d> corners{{-4, -3, 1.2}, {3, -3, 1.2}, {3, 2, 2.0}};
+  for (size_t leg = 0; leg + 1 < corners.size(); ++leg) {
+    const int steps = static_cast<int>(std::round((corners[leg + 1] - corners[leg]).norm() / 0.01));
+    for (int k = 0; k < steps; ++k) p.corridor.push_back(corners[leg] + (corners[leg + 1] - corners[leg]) * k / steps);
+  }
+  p.corridor.push_back(corners.back());
+  p.corridor_radius_m = 1.1;
+  auto distance = [&](const Eigen::Vector3d& x) {
+    double d = std::numeric_limits<double>::infinity();
+    for (size_t leg = 0; leg + 1 < corners.size(); ++leg) {
+      const Eigen::Vector3d ab = corners[leg + 1] - corners[leg];
+      const double t = std::clamp((x - corners[leg]).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+      d = std::min(d, (x - corners[leg] - t * ab).norm());
+    }
+    return d;
+  };
+  std::vector<Eigen::Vector3d> expected;
+  for (const Eigen::Vector3d& x : *grid) {
+    // Those within a quarter spacing of the radius may go either way (the path is followed
+    // through its points a quarter spacing apart).
+    if (std::abs(distance(x) - p.corridor_radius_m) < 0.25 * p.spacing_m) continue;
+    if (distance(x) < p.corridor_radius_m) expected.push_back(x);
+  }
+  const Result<std::vector<Eigen::Vector3d>> tube = placementPositions(p);
+  ASSERT_TRUE(tube.ok());
+  size_t matched = 0;
+  for (const Eigen::Vector3d& x : *tube) {
+    EXPECT_LE(distance(x), p.corridor_radius_m + 0.25 * p.spacing_m) << x.transpose();
+    for (const Eigen::Vector3d& e : expected) matched += (x - e).norm() < 1e-9;
+  }
+  EXPECT_EQ(matched, expected.size());
+  EXPECT_GT(expected.size(), 300u);
+  EXPECT_LT(tube->size(), grid->size() / 4);
+  // The positions are the box grid's own and in its order.
+  for (size_t k = 1; k < tube->size(); ++k) {
+    const Eigen::Vector3d &a = (*tube)[k - 1], &b = (*tube)[k];
+    EXPECT_TRUE(a.x() < b.x() || (a.x() == b.x() && (a.y() < b.y() || (a.y() == b.y() && a.z() < b.z())))) << k;
+  }
+
+  KeyframePlacement bad = p;
+  bad.corridor_radius_m = 0;
+  EXPECT_FALSE(validateKeyframePlacement(bad).ok());
+  bad = p;
+  bad.corridor[3].y() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(validateKeyframePlacement(bad).ok());
+  bad = p;
+  bad.max_views = 1000;  // the tube holds more positions x 12 headings: refused, the count stopped early
+  const Status s = validateKeyframePlacement(bad);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.error().message.find("corridor holds more than"), std::string::npos) << s.error().message;
+  // A path outside the box: no position, not an error (the build then reports no keyframe).
+  bad = p;
+  for (Eigen::Vector3d& c : bad.corridor) c.z() += 20;
+  const Result<std::vector<Eigen::Vector3d>> none = placementPositions(bad);
+  ASSERT_TRUE(none.ok());
+  EXPECT_TRUE(none->empty());
+}
+
 TEST(KeyframeDatabase, QueryRanksByHammingDistanceInsideTheRegion) {
   KeyframeDatabase db(7, test::localizeCamera());
   const double xs[] = {0.0, 1.0, 2.0, 3.0, 10.0};

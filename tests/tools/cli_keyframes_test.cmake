@@ -112,3 +112,17 @@ run_fails("global init without a database" "--global-init needs --db" track --se
 run_fails("too many views" "exceed the limit" keyframes build --sequence ${seq} --out ${WORK}/x.kdb --spacing 0.001
           --renderer cpu)
 run_fails("missing database" "not|No such" track --sequence ${seq} --out ${WORK}/x/traj.txt --db ${WORK}/nope.kdb)
+# A corridor: only the positions within its radius of a path (the ground truth, or --path).
+run_ok("corridor build" keyframes build --sequence ${seq} --out ${WORK}/tube.kdb --spacing 0.25 --margin 0.5
+       --corridor 0.3 --headings 4 --renderer cpu --threads 2)
+if(NOT out MATCHES "within 0.3 m of a path of [0-9]+ poses" OR NOT out MATCHES "keyframes: [1-9][0-9]* of")
+  message(FATAL_ERROR "keyframes build --corridor output:\n${out}")
+endif()
+run_ok("corridor build from a path file" keyframes build --sequence ${seq} --out ${WORK}/tube2.kdb --spacing 0.25
+       --corridor 0.3 --path ${seq}/groundtruth.txt --headings 4 --renderer cpu --threads 2 -q)
+run_fails("a path without a corridor" "--path is the corridor's path: give --corridor" keyframes build
+          --sequence ${seq} --out ${WORK}/x.kdb --path ${seq}/groundtruth.txt --renderer cpu)
+run_fails("a corridor's missing path" "nope.tum" keyframes build --sequence ${seq} --out ${WORK}/x.kdb
+          --corridor 1 --path ${WORK}/nope.tum --renderer cpu)
+run_fails("a corridor with too many views" "corridor holds more than" keyframes build --sequence ${seq}
+          --out ${WORK}/x.kdb --corridor 1 --spacing 0.002 --renderer cpu)

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <bit>
 #include <cmath>
@@ -14,6 +15,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <thread>
+#include <unordered_set>
 
 #include "vkloc/core/atomic_file.hpp"
 #include "vkloc/core/clock.hpp"
@@ -312,6 +314,91 @@ Pose placementPose(const Eigen::Vector3d& position, const Eigen::Vector3d& up_wo
   return T.ok() ? *T : Pose::Identity();
 }
 
+namespace {
+
+/// The placement's grid: n points per axis, the first at start, centred in the box.
+struct PlacementGrid {
+  std::array<int64_t, 3> n{};
+  std::array<double, 3> start{};
+  double spacing = 1;
+  Eigen::Vector3d at(int64_t i, int64_t j, int64_t k) const {
+    return {start[0] + static_cast<double>(i) * spacing, start[1] + static_cast<double>(j) * spacing,
+            start[2] + static_cast<double>(k) * spacing};
+  }
+};
+
+PlacementGrid placementGrid(const KeyframePlacement& p) {
+  PlacementGrid g;
+  g.spacing = p.spacing_m;
+  for (int a = 0; a < 3; ++a) {
+    const double extent = static_cast<double>(p.volume.max[a]) - static_cast<double>(p.volume.min[a]);
+    g.n[a] = static_cast<int64_t>(std::floor(extent / p.spacing_m)) + 1;
+    g.start[a] = p.volume.min[a] + 0.5 * (extent - static_cast<double>(g.n[a] - 1) * p.spacing_m);
+  }
+  return g;
+}
+
+/// Distance of x from the segment a-b, metres.
+double segmentDistance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((x - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (x - (a + t * ab)).norm();
+}
+
+/// The grid indices (x slowest) of the positions within the corridor, sorted; stops with an
+/// error once they would exceed max_views. The corridor's points nearer than a quarter spacing to
+/// the last one kept are skipped (each segment's cells are visited once; a dense ground truth
+/// would visit them hundreds of times).
+Result<std::vector<int64_t>> corridorCells(const KeyframePlacement& p) {
+  const PlacementGrid g = placementGrid(p);
+  std::vector<Eigen::Vector3d> path;
+  for (const Eigen::Vector3d& c : p.corridor) {
+    if (path.empty() || (c - path.back()).norm() >= 0.25 * p.spacing_m) path.push_back(c);
+  }
+  if (p.corridor.size() > 1 && (p.corridor.back() - path.back()).norm() > 0) path.push_back(p.corridor.back());
+  const double r = p.corridor_radius_m;
+  const size_t per_position = static_cast<size_t>(p.headings) * p.tilts_deg.size();
+  const size_t max_positions = p.max_views / std::max<size_t>(1, per_position);
+  std::unordered_set<int64_t> cells;
+  for (size_t s = 0; s < path.size(); ++s) {
+    const Eigen::Vector3d& a = path[s];
+    const Eigen::Vector3d& b = path[std::min(s + 1, path.size() - 1)];
+    std::array<int64_t, 3> lo{}, hi{};
+    for (int d = 0; d < 3; ++d) {
+      lo[d] =
+          std::max<int64_t>(0, static_cast<int64_t>(std::ceil((std::min(a[d], b[d]) - r - g.start[d]) / g.spacing)));
+      hi[d] = std::min<int64_t>(g.n[d] - 1,
+                                static_cast<int64_t>(std::floor((std::max(a[d], b[d]) + r - g.start[d]) / g.spacing)));
+    }
+    for (int64_t i = lo[0]; i <= hi[0]; ++i) {
+      for (int64_t j = lo[1]; j <= hi[1]; ++j) {
+        for (int64_t k = lo[2]; k <= hi[2]; ++k) {
+          if (segmentDistance(g.at(i, j, k), a, b) > r) continue;
+          cells.insert((i * g.n[1] + j) * g.n[2] + k);
+          if (cells.size() > max_positions) {
+            return makeError(ErrorCode::kInvalidArgument,
+                             fmt::format("keyframe placement: the corridor holds more than {} views, the limit (a "
+                                         "coarser spacing, a narrower corridor, fewer headings or tilts)",
+                                         p.max_views));
+          }
+        }
+      }
+    }
+  }
+  std::vector<int64_t> sorted(cells.begin(), cells.end());
+  std::sort(sorted.begin(), sorted.end());
+  return sorted;
+}
+
+Result<size_t> corridorPositionCount(const KeyframePlacement& p) {
+  Result<std::vector<int64_t>> cells = corridorCells(p);
+  if (!cells.ok()) return cells.error();
+  return cells->size();
+}
+
+}  // namespace
+
 Status validateKeyframePlacement(const KeyframePlacement& p) {
   auto bad = [](const std::string& what) {
     return makeError(ErrorCode::kInvalidArgument, fmt::format("keyframe placement: {}", what));
@@ -332,6 +419,15 @@ Status validateKeyframePlacement(const KeyframePlacement& p) {
       !finiteIn(p.min_model_fraction, 0.0, 1.0) || !finiteIn(p.min_contrast, 0.0, 255.0)) {
     return bad("min_clearance_m >= 0, fractions in 0..1 and min_contrast in 0..255 needed");
   }
+  if (!p.corridor.empty()) {
+    if (!finiteIn(p.corridor_radius_m, 1e-6, 1e6)) return bad("the corridor's radius must be in 1e-6..1e6 m");
+    for (const Eigen::Vector3d& c : p.corridor) {
+      if (!c.allFinite()) return bad("the corridor's points must be finite");
+    }
+    Result<size_t> n = corridorPositionCount(p);  // counts up to the limit, then stops
+    if (!n.ok()) return n.error();
+    return Status::success();
+  }
   double views = static_cast<double>(p.headings) * static_cast<double>(p.tilts_deg.size());
   for (int a = 0; a < 3; ++a) views *= std::floor((p.volume.max[a] - p.volume.min[a]) / p.spacing_m) + 1;
   if (views > static_cast<double>(p.max_views)) {
@@ -339,6 +435,26 @@ Status validateKeyframePlacement(const KeyframePlacement& p) {
                            p.max_views));
   }
   return Status::success();
+}
+
+Result<std::vector<Eigen::Vector3d>> placementPositions(const KeyframePlacement& placement) {
+  VKLOC_TRY_STATUS(validateKeyframePlacement(placement));
+  const PlacementGrid g = placementGrid(placement);
+  std::vector<Eigen::Vector3d> positions;
+  if (!placement.corridor.empty()) {
+    Result<std::vector<int64_t>> cells = corridorCells(placement);
+    if (!cells.ok()) return cells.error();
+    positions.reserve(cells->size());
+    for (int64_t c : *cells) positions.push_back(g.at(c / (g.n[1] * g.n[2]), (c / g.n[2]) % g.n[1], c % g.n[2]));
+    return positions;
+  }
+  positions.reserve(static_cast<size_t>(g.n[0] * g.n[1] * g.n[2]));
+  for (int64_t i = 0; i < g.n[0]; ++i) {
+    for (int64_t j = 0; j < g.n[1]; ++j) {
+      for (int64_t k = 0; k < g.n[2]; ++k) positions.push_back(g.at(i, j, k));
+    }
+  }
+  return positions;
 }
 
 Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::vector<Renderer*>& renderers,
@@ -369,24 +485,14 @@ Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::ve
   culled.outputs = kRenderDepth;
   culled.cull_back_faces = true;
 
-  int n[3];
-  double start[3];
-  for (int a = 0; a < 3; ++a) {
-    const double extent = placement.volume.max[a] - placement.volume.min[a];
-    n[a] = static_cast<int>(std::floor(extent / placement.spacing_m)) + 1;
-    start[a] = placement.volume.min[a] + 0.5 * (extent - (n[a] - 1) * placement.spacing_m);
-  }
+  Result<std::vector<Eigen::Vector3d>> positions = placementPositions(placement);
+  if (!positions.ok()) return positions.error();
   std::vector<Pose> poses;
-  for (int i = 0; i < n[0]; ++i) {
-    for (int j = 0; j < n[1]; ++j) {
-      for (int k = 0; k < n[2]; ++k) {
-        const Eigen::Vector3d position(start[0] + i * placement.spacing_m, start[1] + j * placement.spacing_m,
-                                       start[2] + k * placement.spacing_m);
-        for (double tilt : placement.tilts_deg) {
-          for (int h = 0; h < placement.headings; ++h) {
-            poses.push_back(placementPose(position, placement.up_world, 360.0 * h / placement.headings, tilt));
-          }
-        }
+  poses.reserve(positions->size() * placement.tilts_deg.size() * static_cast<size_t>(placement.headings));
+  for (const Eigen::Vector3d& position : *positions) {
+    for (double tilt : placement.tilts_deg) {
+      for (int h = 0; h < placement.headings; ++h) {
+        poses.push_back(placementPose(position, placement.up_world, 360.0 * h / placement.headings, tilt));
       }
     }
   }
@@ -465,7 +571,7 @@ Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::ve
   if (error) return *error;
 
   KeyframeBuildStats s;
-  s.positions = static_cast<size_t>(n[0]) * n[1] * n[2];
+  s.positions = positions->size();
   s.views = poses.size();
   KeyframeDatabase db(modelFingerprint(model), camera);
   for (const View& view : views) {

@@ -152,11 +152,24 @@ struct KeyframePlacement {
   /// Views whose thumbnail's contrast (thumbnailContrast) is below this are left out.
   double min_contrast = 3.0;
   size_t max_views = 5'000'000;  ///< More views than this is an error (a spacing too fine).
+  /// A flight corridor: when not empty, only the grid positions within corridor_radius_m of this
+  /// polyline (world frame, metres; a planned path) are used, not the whole box: a path's tube
+  /// takes a grid a few times finer for the same number of views.
+  std::vector<Eigen::Vector3d> corridor;
+  double corridor_radius_m = 0;  ///< Metres (> 0 with a corridor).
 };
 
 /// Checks the placement: a non-empty finite volume, spacing > 0, a unit-able up vector, headings
-/// in 1..360, tilts in -90..90, fractions in 0..1 and the view count at most max_views.
+/// in 1..360, tilts in -90..90, fractions in 0..1, a finite corridor with a radius > 0 and the
+/// view count at most max_views.
 Status validateKeyframePlacement(const KeyframePlacement& placement);
+
+/// The placement's camera positions (world frame, metres): the grid points of the box, centred in
+/// it, spacing_m apart; with a corridor, only those within its radius of the polyline (followed
+/// through its points a quarter spacing apart, so a position within a quarter spacing of the
+/// radius may go either way). The order is fixed (x slowest, z fastest). Errors: kInvalidArgument for a placement
+/// validateKeyframePlacement refuses.
+Result<std::vector<Eigen::Vector3d>> placementPositions(const KeyframePlacement& placement);
 
 /// What a build did.
 struct KeyframeBuildStats {
