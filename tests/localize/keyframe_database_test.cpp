@@ -480,15 +480,13 @@ TEST(Relocalization, WithoutTheImuAStartPoseIsReportedAtOnce) {
   EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(0)), 5e-3);
 }
 
-TEST(Relocalization, WithoutTheImuTheFrameAfterARelocalizedOneIsTakenOnlyWhenConfidentlyVerified) {
-  // No IMU: the frame after a relocalized one is aligned from that pose with no motion to go by.
-  // Clutter drawn over it (seeded strokes) lowers its verification score below the confident
-  // one: it is not tracked but searched again. The control, the rule off (the confident score
-  // set to tracking's), tracks it.
-  ImageU8 cluttered = asymmetricFrame(1);
-  std::mt19937 rng(7);
+/// Frame `index` of the Localizer scenes with clutter drawn over it: `strokes` seeded strokes of
+/// random gray levels, two pixels wide.
+ImageU8 clutteredFrame(int index, unsigned seed, int strokes = 120) {
+  ImageU8 cluttered = asymmetricFrame(index);
+  std::mt19937 rng(seed);
   std::uniform_int_distribution<int> x(0, cluttered.width - 1), y(0, cluttered.height - 1), gray(0, 255);
-  for (int k = 0; k < 120; ++k) {
+  for (int k = 0; k < strokes; ++k) {
     const int x0 = x(rng), y0 = y(rng), x1 = x(rng), y1 = y(rng);
     const uint8_t value = static_cast<uint8_t>(gray(rng));
     const int n = std::max(std::abs(x1 - x0), std::abs(y1 - y0)) + 1;
@@ -498,6 +496,15 @@ TEST(Relocalization, WithoutTheImuTheFrameAfterARelocalizedOneIsTakenOnlyWhenCon
       if (u + 1 < cluttered.width) cluttered.at(u + 1, v) = value;
     }
   }
+  return cluttered;
+}
+
+TEST(Relocalization, WithoutTheImuTheFrameAfterARelocalizedOneIsTakenOnlyWhenConfidentlyVerified) {
+  // No IMU: the frame after a relocalized one is aligned from that pose with no motion to go by.
+  // Clutter drawn over it (seeded strokes) lowers its verification score below the confident
+  // one: it is not tracked but searched again. The control, the rule off (the confident score
+  // set to tracking's), tracks it.
+  const ImageU8 cluttered = clutteredFrame(1, 7);
   const LocalizerOptions defaults;
   for (const bool rule : {true, false}) {
     auto localizer = relocalizer(KeyframeThreading::kSynchronous, rule ? -1.0 : defaults.verification.min_score);
