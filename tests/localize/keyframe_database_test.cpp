@@ -533,6 +533,39 @@ TEST(Relocalization, WithoutTheImuTheFrameAfterARelocalizedOneIsTakenOnlyWhenCon
   }
 }
 
+TEST(Localizer, WithoutTheImuOrADatabaseAPoseIsTakenOnlyWhenVerified) {
+  // No IMU, no database: nothing but the verification score checks a pose. Heavy clutter drawn
+  // over the next frame (400 seeded strokes) pulls its alignment metres away at a score near 0.05:
+  // reported lost; the control, the gate off (verification.min_score 0), reports it as tracked.
+  // The clean frame after it is tracked again.
+  for (unsigned seed : {1u, 2u}) {
+    for (const bool gate : {true, false}) {
+      LocalizerOptions options;
+      options.keyframe_threading = KeyframeThreading::kSynchronous;
+      if (!gate) options.verification.min_score = 0;
+      auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
+      ASSERT_TRUE(created.ok()) << created.error().message;
+      Localizer& localizer = **created;
+      localizer.reset(test::localizeTruth(0));
+      const Result<LocalizationResult> first = localizer.localize(0, asymmetricFrame(0));
+      ASSERT_TRUE(first.ok() && first->state == TrackingState::kTracking);
+      const Result<LocalizationResult> next = localizer.localize(50'000'000, clutteredFrame(1, seed, 400));
+      ASSERT_TRUE(next.ok()) << next.error().message;
+      EXPECT_LT(next->verify_score, LocalizerOptions{}.verification.min_score) << "seed " << seed;
+      if (!gate) {
+        EXPECT_EQ(next->state, TrackingState::kTracking) << "seed " << seed;
+        EXPECT_GT(test::translationError(next->T_world_camera, test::localizeTruth(1)), 0.5) << "seed " << seed;
+        continue;
+      }
+      EXPECT_EQ(next->state, TrackingState::kLost) << "seed " << seed << ", score " << next->verify_score;
+      const Result<LocalizationResult> after = localizer.localize(100'000'000, asymmetricFrame(2));
+      ASSERT_TRUE(after.ok()) << after.error().message;
+      EXPECT_EQ(after->state, TrackingState::kTracking) << "seed " << seed;
+      EXPECT_LT(test::translationError(after->T_world_camera, test::localizeTruth(2)), 5e-3) << "seed " << seed;
+    }
+  }
+}
+
 TEST(Relocalization, RecoversAfterBlackFramesAndAJumpWithoutSearchingBlackOnes) {
   auto localizer = relocalizer(KeyframeThreading::kSynchronous);
   ASSERT_TRUE(localizer);

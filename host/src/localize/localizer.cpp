@@ -1659,7 +1659,10 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // tracked 0.54 m off at 0.16).
   const bool blind_after_relocalized =
       prediction && !prediction->inertial && previous_t_ns && m.last_relocalized_t_ns == previous_t_ns;
-  if (m.database && track.state == TrackingState::kTracking &&
+  // Without an IMU (no reading since the start) nothing else checks a pose: it is taken only when
+  // verified too, database or not (taken, a pose metres off was reported as tracked and tracked on: the
+  // room without its IMU, after its 190 deg/s turn at frame 86, 2-3 m off at scores 0-0.12).
+  if ((m.database || !m.last_imu) && track.state == TrackingState::kTracking &&
       out.verify_score < m.minTakenScore(blind_after_relocalized)) {
     track.state = TrackingState::kLost;
     out.state = TrackingState::kLost;
