@@ -391,12 +391,6 @@ Result<std::vector<int64_t>> corridorCells(const KeyframePlacement& p) {
   return sorted;
 }
 
-Result<size_t> corridorPositionCount(const KeyframePlacement& p) {
-  Result<std::vector<int64_t>> cells = corridorCells(p);
-  if (!cells.ok()) return cells.error();
-  return cells->size();
-}
-
 }  // namespace
 
 Status validateKeyframePlacement(const KeyframePlacement& p) {
@@ -424,8 +418,9 @@ Status validateKeyframePlacement(const KeyframePlacement& p) {
     for (const Eigen::Vector3d& c : p.corridor) {
       if (!c.allFinite()) return bad("the corridor's points must be finite");
     }
-    Result<size_t> n = corridorPositionCount(p);  // counts up to the limit, then stops
-    if (!n.ok()) return n.error();
+    // The view count: the corridor's positions, counted up to the limit.
+    Result<std::vector<int64_t>> cells = corridorCells(p);
+    if (!cells.ok()) return cells.error();
     return Status::success();
   }
   double views = static_cast<double>(p.headings) * static_cast<double>(p.tilts_deg.size());

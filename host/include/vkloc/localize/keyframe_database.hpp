@@ -167,8 +167,8 @@ Status validateKeyframePlacement(const KeyframePlacement& placement);
 /// The placement's camera positions (world frame, metres): the grid points of the box, centred in
 /// it, spacing_m apart; with a corridor, only those within its radius of the polyline (followed
 /// through its points a quarter spacing apart, so a position within a quarter spacing of the
-/// radius may go either way). The order is fixed (x slowest, z fastest). Errors: kInvalidArgument for a placement
-/// validateKeyframePlacement refuses.
+/// radius may go either way). The order is fixed (x slowest, z fastest). Errors:
+/// kInvalidArgument for a placement validateKeyframePlacement refuses.
 Result<std::vector<Eigen::Vector3d>> placementPositions(const KeyframePlacement& placement);
 
 /// What a build did.
