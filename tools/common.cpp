@@ -193,6 +193,11 @@ void LocalizerArgs::add(CLI::App& app) {
                  "Factor on the filter's rotation covariance in the alignment's attitude prior")
       ->check(CLI::Range(1e-3, 1e6))
       ->capture_default_str();
+  app.add_option("--local-search", local_search,
+                 "Without a keyframe database, after a loss: search keyframes rendered around the last tracked "
+                 "pose (on | off)")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
   app.add_option("--backend", backend, "Live edges + alignment: auto | vulkan | cpu")
       ->check(CLI::IsMember({"auto", "vulkan", "cpu"}))
       ->capture_default_str();
@@ -215,6 +220,7 @@ void LocalizerArgs::apply(LocalizerOptions& options) const {
   options.report_filtered_pose = frame_pose == "filter";
   options.rotation_prior_from_filter = rotation_prior == "filter";
   options.rotation_prior_covariance_scale = rotation_prior_scale;
+  if (local_search == "off") options.relocalization.local_headings = 0;
 }
 
 std::vector<std::string> LocalizerArgs::arguments() const {
@@ -235,7 +241,9 @@ std::vector<std::string> LocalizerArgs::arguments() const {
           "--rotation-prior",
           rotation_prior,
           "--rotation-prior-scale",
-          fmt::format("{:g}", rotation_prior_scale)};
+          fmt::format("{:g}", rotation_prior_scale),
+          "--local-search",
+          local_search};
 }
 
 void DeviceArgs::add(CLI::App& app) {

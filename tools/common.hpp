@@ -97,6 +97,7 @@ struct LocalizerArgs {
   std::string frame_pose = "filter";      ///< Tracked frames' pose: filter (the EKF's posterior) | visual.
   std::string rotation_prior = "filter";  ///< Attitude prior of the alignment: filter | off.
   double rotation_prior_scale = 1.0;      ///< Factor on that prior's covariance.
+  std::string local_search = "on";        ///< Without a database, search keyframes rendered after a loss.
   void add(CLI::App& app);
   /// Sets the options' backend, policy and keyframe threading; throws Failure on a bad value.
   void apply(LocalizerOptions& options) const;

@@ -566,6 +566,57 @@ TEST(Localizer, WithoutTheImuOrADatabaseAPoseIsTakenOnlyWhenVerified) {
   }
 }
 
+TEST(Relocalization, WithoutADatabaseKeyframesRenderedAroundTheLastPoseFindAFastTurn) {
+  // No IMU, no database: the camera tracks three frames, then turns fast (kTurnDeg about its
+  // vertical axis, kTiltDeg about its horizontal one) and the constant-velocity prediction is
+  // tens of degrees off. A black frame first: nothing to search (no keyframes rendered for it).
+  // The turned frame is found by the search over keyframes rendered around the last tracked pose
+  // (RelocalizationOptions::local_headings); the control, with none, loses it.
+  constexpr double kTurnDeg = 40.0, kTiltDeg = 8.0;
+  Pose turned = test::localizeTruth(3);
+  turned.linear() = turned.linear() *
+                    Eigen::AngleAxisd(kTurnDeg * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                    Eigen::AngleAxisd(kTiltDeg * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  auto view = renderReference(test::makeAsymmetricScene(), test::localizeCamera(), turned);
+  ASSERT_TRUE(view.ok()) << view.error().message;
+  for (const bool local : {true, false}) {
+    LocalizerOptions options;
+    options.keyframe_threading = KeyframeThreading::kSynchronous;
+    if (!local) options.relocalization.local_headings = 0;
+    auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
+    ASSERT_TRUE(created.ok()) << created.error().message;
+    Localizer& localizer = **created;
+    localizer.reset(test::localizeTruth(0));
+    int64_t t = 0;
+    for (int i = 0; i < 3; ++i, t += 50'000'000) {
+      const Result<LocalizationResult> r = localizer.localize(t, asymmetricFrame(i));
+      ASSERT_TRUE(r.ok() && r->state == TrackingState::kTracking) << i;
+    }
+    const Result<LocalizationResult> black = localizer.localize(t, ImageU8(320, 240, 1, 0));
+    ASSERT_TRUE(black.ok()) << black.error().message;
+    EXPECT_EQ(black->state, TrackingState::kLost);
+    EXPECT_EQ(black->relocalization_candidates, 0) << "a black frame has nothing to search for";
+    EXPECT_EQ(black->render_ms, 0.0) << "no keyframes rendered for a black frame";
+    t += 50'000'000;
+    const Result<LocalizationResult> r = localizer.localize(t, view->gray);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    if (!local) {
+      EXPECT_EQ(r->state, TrackingState::kLost) << "score " << r->verify_score;
+      EXPECT_EQ(r->relocalization_candidates, 0);
+      continue;
+    }
+    EXPECT_EQ(r->state, TrackingState::kRelocalized) << "score " << r->verify_score;
+    EXPECT_GT(r->relocalization_candidates, 0);
+    EXPECT_LT(test::translationError(r->T_world_camera, turned), 5e-3);
+    EXPECT_LT(test::rotationErrorDeg(r->T_world_camera, turned), 0.3);
+    // Tracking goes on from the found pose.
+    const Result<LocalizationResult> next = localizer.localize(t + 50'000'000, view->gray);
+    ASSERT_TRUE(next.ok()) << next.error().message;
+    EXPECT_EQ(next->state, TrackingState::kTracking) << "score " << next->verify_score;
+    EXPECT_LT(test::translationError(next->T_world_camera, turned), 5e-3);
+  }
+}
+
 TEST(Relocalization, RecoversAfterBlackFramesAndAJumpWithoutSearchingBlackOnes) {
   auto localizer = relocalizer(KeyframeThreading::kSynchronous);
   ASSERT_TRUE(localizer);
@@ -730,6 +781,20 @@ TEST(Relocalization, DatabaseAndSearchErrors) {
   bad = LocalizerOptions{};
   bad.relocalization.agree_deg = NAN;
   EXPECT_FALSE(Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), bad, nullptr).ok());
+  // The local search's options (keyframes rendered after a loss without a database).
+  for (int k = 0; k < 6; ++k) {
+    bad = LocalizerOptions{};
+    RelocalizationOptions& l = bad.relocalization;
+    if (k == 0) l.local_headings = 361;
+    if (k == 1) l.local_tilts_deg = {0.0, 91.0};
+    if (k == 2) l.local_offset_fraction = NAN;
+    if (k == 3) l.local_depth_fraction = -1;
+    if (k == 4) l.local_max_s = INFINITY;
+    if (k == 5) l.local_after_untracked_frames = 0;
+    const auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), bad, nullptr);
+    ASSERT_FALSE(created.ok()) << k;
+    EXPECT_NE(created.error().message.find("local_"), std::string::npos) << created.error().message;
+  }
 }
 
 }  // namespace

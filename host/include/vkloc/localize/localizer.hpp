@@ -162,6 +162,27 @@ struct RelocalizationOptions {
   /// built at one height bounds the height to +- the reach; one with a single position (reach 0)
   /// bounds nothing.
   bool inside_database_box = true;
+  /// Without a keyframe database, a search after a loss uses keyframes rendered when needed
+  /// (seed 001 sec. II-D renders keyframes as tracking needs them): 160 pixels wide at the last
+  /// tracked position (and at the prediction's, when it lies farther than local_offset_fraction x
+  /// the scene depth from it), the last tracked orientation turned about the camera's own vertical
+  /// axis (the image's) in local_headings steps over the full turn and tilted by each of
+  /// local_tilts_deg about its horizontal one. They are made again after a tracked frame and when
+  /// the prediction moves on by more than local_offset_fraction x the depth, and searched as a
+  /// database's are while the loss is at most local_max_s old (a camera lost longer may be
+  /// anywhere). A pose found is taken only within min_radius_m + growth_m_s x the seconds since the
+  /// last tracked frame, or local_depth_fraction x the scene depth when more, of the path from the
+  /// last tracked position to the prediction's. With the IMU, only once the prediction's 3 sigma
+  /// exceeds local_offset_fraction x the scene depth. 0 headings: no search without a database.
+  int local_headings = 12;
+  std::vector<double> local_tilts_deg{-25.0, 0.0, 25.0};
+  double local_offset_fraction = 0.1;
+  double local_max_s = 10.0;
+  double local_depth_fraction = 0.5;
+  /// The local search starts on the frame that makes this many untracked frames in a row (>= 1).
+  /// At once, as a database's: one frame later, the camera has moved on from the last tracked pose
+  /// (README, relocalization without a database).
+  int local_after_untracked_frames = 1;
 };
 
 /// Everything the Localizer can be tuned with. Plain data; checked by Localizer::create.
