@@ -202,6 +202,7 @@ struct TrackedImage {
   ImageU8 gray;
   Pose T_world_camera = Pose::Identity();
   int64_t t_ns = 0;
+  double scene_depth_m = 0;  ///< Median depth of the keyframe it was tracked against, metres.
 };
 
 }  // namespace
@@ -288,9 +289,9 @@ struct Localizer::Impl {
   /// Without a database: the keyframes rendered around the last tracked pose after a loss
   /// (RelocalizationOptions::local_headings), and that pose (rendered anew when it changes).
   std::optional<KeyframeDatabase> local_database;
+  std::vector<ImageU8> local_views;  ///< Its keyframes' renders (the re-ranking's).
   std::optional<Pose> local_database_pose;
   Eigen::Vector3d local_database_guess = Eigen::Vector3d::Zero();  ///< The predicted position it was made at.
-  double local_database_depth_m = 0;  ///< The scene depth it was made at (the keyframe's), metres.
   uint64_t model_fingerprint = 0;
   bool searching = false;                     ///< Global initialization in progress (startSearch).
   std::optional<SearchRegion> search_region;  ///< Its region (nullopt: the whole database).
@@ -730,13 +731,20 @@ struct Localizer::Impl {
   /// around the last tracked pose `T_world_last` and the predicted position `p_world_guess`.
   /// Views with less than a fifth of their pixels on the model, a surface nearer than 5 cm or
   /// too little contrast to describe are left out, as a database's build leaves them out.
+  /// `views` receives each kept keyframe's render (the re-ranking's, when of its size).
   Result<KeyframeDatabase> localDatabase(const Pose& T_world_last, const Eigen::Vector3d& p_world_guess,
-                                         double scene_depth_m, LocalizationResult& out) {
+                                         double scene_depth_m, std::vector<ImageU8>& views, LocalizationResult& out) {
     const RelocalizationOptions& o = options.relocalization;
     const auto t0 = SteadyClock::now();
-    const PinholeCamera small = scaledCamera(camera, 160);
+    // 160 pixels wide as a database's views, wider for a camera wider than 2.5:1 (at least 128
+    // rows: the descriptor's thumbnail is 80x64).
+    const int width =
+        std::max(2 * kThumbnailWidth,
+                 static_cast<int>(std::ceil(2.0 * kThumbnailHeight * camera.width / std::max(1, camera.height))));
+    const PinholeCamera small = scaledCamera(camera, width);
     const size_t pixels = static_cast<size_t>(small.width) * small.height;
     KeyframeDatabase db(model_fingerprint, camera);
+    views.clear();
     std::vector<Eigen::Vector3d> positions{T_world_last.translation()};
     std::vector<float> depths;
     for (size_t p = 0; p < positions.size(); ++p) {
@@ -771,6 +779,7 @@ struct Localizer::Impl {
           k.scene_depth_m = *mid;
           k.descriptor = *descriptor;
           db.add(k);
+          views.push_back(std::move(view->gray));
         }
       }
       if (p == 0 && scene_depth_m > 0 && p_world_guess.allFinite() &&
@@ -798,18 +807,21 @@ struct Localizer::Impl {
   /// Relocalization search (RelocalizationOptions) of this frame in `region` (nullopt: the whole
   /// database) of `db`: the attached database (a pose taken inside its box), or with `local` the
   /// keyframes rendered around the last tracked pose (no grid reach; a pose taken only within the
-  /// bound). True with `found` and its keyframe current when a pose reached min_score; false when
-  /// none did (or the frame has too little contrast), the keyframes then reset.
+  /// bound; `views`: its keyframes' renders, re-ranked without rendering them again). True with
+  /// `found` and its keyframe current when a pose reached min_score; false when none did (or the
+  /// frame has too little contrast), the keyframes then reset.
   Result<bool> relocalize(const KeyframeDatabase& db, const std::optional<LocalBound>& local, const ImageU8& gray,
                           int64_t t_ns, const std::optional<SearchRegion>& region, TrackResult& found,
-                          LocalizationResult& out) {
+                          LocalizationResult& out, const std::vector<ImageU8>* views = nullptr) {
     const RelocalizationOptions& o = options.relocalization;
     const auto t0 = SteadyClock::now();
     // The keyframes nearest a camera at the region's border may lie outside it: the region grows
     // by the reach of the database's grid.
     std::optional<SearchRegion> searched = region;
     if (searched && !local) searched->radius_m += database_reach_m;
-    out.search_radius_m = searched ? searched->radius_m : std::numeric_limits<double>::infinity();
+    out.search_radius_m = local      ? local->radius_m
+                          : searched ? searched->radius_m
+                                     : std::numeric_limits<double>::infinity();
     Result<ImageU8> thumbnail = descriptorThumbnail(gray);
     if (!thumbnail.ok()) return thumbnail.error();
     if (thumbnailContrast(*thumbnail) < o.min_contrast) {
@@ -832,10 +844,17 @@ struct Localizer::Impl {
                  cv::Size(small.width, small.height), 0, 0, cv::INTER_AREA);
       std::vector<std::pair<double, size_t>> ranked;
       for (size_t k = 0; k < candidates.size(); ++k) {
-        Result<RenderOutput> view = keyframes->renderView(small, db.keyframes()[candidates[k].index].T_world_camera);
-        if (!view.ok()) return view.error();
+        const size_t index = candidates[k].index;
+        std::optional<RenderOutput> rendered;
+        if (!views || index >= views->size() || (*views)[index].width != small.width ||
+            (*views)[index].height != small.height) {
+          Result<RenderOutput> view = keyframes->renderView(small, db.keyframes()[index].T_world_camera);
+          if (!view.ok()) return view.error();
+          rendered = std::move(view).value();
+        }
+        const ImageU8& render = rendered ? rendered->gray : (*views)[index];
         Result<std::vector<ImageShift>> shift =
-            estimateImageShifts(view->gray, live_small, small, Eigen::Matrix3d::Identity(), 0, 1);
+            estimateImageShifts(render, live_small, small, Eigen::Matrix3d::Identity(), 0, 1);
         const double peak = shift.ok() && !shift->empty() ? shift->front().response : 0.0;
         ranked.emplace_back(peak - o.rerank_bits_weight * candidates[k].distance, k);
       }
@@ -1152,6 +1171,7 @@ struct Localizer::Impl {
     last_tracked_gray->gray = gray;
     last_tracked_gray->T_world_camera = track.T_world_camera;
     last_tracked_gray->t_ns = t_ns;
+    last_tracked_gray->scene_depth_m = keyframe.scene_depth_m;
     last_relocalized_t_ns = t_ns;
     out.state = TrackingState::kRelocalized;
     out.T_world_camera = track.T_world_camera;
@@ -1178,6 +1198,9 @@ struct Localizer::Impl {
     last_tracked_t_ns.reset();
     last_relocalized_t_ns.reset();
     last_camera_pose.reset();
+    local_database.reset();
+    local_views.clear();
+    local_database_pose.reset();
   }
 
   /// Takes the pose global initialization's search found (adoptRelocalized); with the IMU and
@@ -1844,6 +1867,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     m.last_tracked_gray->gray = gray;
     m.last_tracked_gray->T_world_camera = track.T_world_camera;
     m.last_tracked_gray->t_ns = t_ns;
+    m.last_tracked_gray->scene_depth_m = keyframe.scene_depth_m;
   } else {
     m.keyframes->frameNotTracked();
     applyBridge(m.motion->bridge(t_ns, prediction, guess), out);
@@ -1888,10 +1912,11 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     }
   }
 
-  // 5b. Relocalization (with a keyframe database): a frame not tracked after
+  // 5b. Relocalization: with a keyframe database, a frame not tracked after
   // after_untracked_frames in a row is searched for around the prediction, in a region that
   // grows with the time since the last tracked frame, the prediction's uncertainty and every
-  // search that found nothing.
+  // search that found nothing; without one, among keyframes rendered around the last tracked pose
+  // (local_after_untracked_frames).
   if (out.state == TrackingState::kTracking) {
     m.untracked = 0;
     m.failed_searches = 0;
@@ -1902,13 +1927,16 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     const double since_s = m.last_tracked_t_ns ? static_cast<double>(t_ns - *m.last_tracked_t_ns) * 1e-9 : 0.0;
     if (!m.database && o.local_headings > 0 && !o.local_tilts_deg.empty() &&
         m.untracked >= o.local_after_untracked_frames && m.last_tracked_gray && since_s <= o.local_max_s &&
+        gray.width >= kThumbnailWidth && gray.height >= kThumbnailHeight && m.last_tracked_gray->scene_depth_m > 0 &&
         (!prediction || !prediction->inertial ||
-         3.0 * out.inertial_sigma_m > o.local_offset_fraction * out.scene_depth_m)) {
-      // Without a database: keyframes rendered around the last tracked pose, once per loss, on
-      // the first frame with something to recognise. With the IMU only once its prediction may
-      // lie outside the alignment's basin (3 sigma beyond local_offset_fraction of the depth):
-      // bridged frames a few millimetres uncertain need no search (the room's frame 92, relocalized
-      // 12.6 mm off at a score of 0.27, was bridged 1.9 mm off).
+         3.0 * out.inertial_sigma_m > o.local_offset_fraction * m.last_tracked_gray->scene_depth_m)) {
+      // Without a database: keyframes rendered around the last tracked pose on the first frame
+      // with something to recognise (the depth: the last tracked frame's keyframe's). With the
+      // IMU only once its prediction may lie outside the alignment's basin (3 sigma beyond
+      // local_offset_fraction of the depth): bridged frames a few millimetres uncertain need no
+      // search (the room's frame 92, relocalized 12.6 mm off at a score of 0.27, was bridged
+      // 1.9 mm off).
+      const double depth_m = m.last_tracked_gray->scene_depth_m;
       Result<ImageU8> thumbnail = descriptorThumbnail(gray);
       if (!thumbnail.ok()) return thumbnail.error();
       if (thumbnailContrast(*thumbnail) >= o.min_contrast) {
@@ -1916,27 +1944,27 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
         // Made again after a tracked frame, and when the prediction has moved on by more than
         // local_offset_fraction of the depth from the one it was made at.
         if (!m.local_database || !m.local_database_pose || m.local_database_pose->matrix() != T_last.matrix() ||
-            !((guess.translation() - m.local_database_guess).norm() <=
-              o.local_offset_fraction * m.local_database_depth_m)) {
-          Result<KeyframeDatabase> local = m.localDatabase(T_last, guess.translation(), out.scene_depth_m, out);
+            !((guess.translation() - m.local_database_guess).norm() <= o.local_offset_fraction * depth_m)) {
+          Result<KeyframeDatabase> local = m.localDatabase(T_last, guess.translation(), depth_m, m.local_views, out);
           if (!local.ok()) return local.error();
           m.local_database = std::move(local).value();
           m.local_database_pose = T_last;
           m.local_database_guess = guess.translation();
-          m.local_database_depth_m = out.scene_depth_m;
+          out.reference_rendered = true;  // the frame waited for renders (worker mode's pacing)
         }
-        // A pose no farther than the database's search region grows (min_radius_m + growth_m_s x
-        // the seconds since the last tracked frame), or than local_depth_fraction of the scene
-        // depth (a drone over a city moves metres between frames), from the path between the last
-        // tracked position and the prediction: a look-alike place elsewhere verifies as well (the
-        // room without its IMU, keyframes made beside tracking: 4.9 m off at 0.92 after 0.65 s).
+        // A pose no farther than local_depth_fraction of the scene depth (a drone over a city
+        // moves metres between frames, a hand in a room decimetres) + growth_m_s x the seconds
+        // since the last tracked frame from the path between the last tracked position and the
+        // prediction: a look-alike place elsewhere verifies as well (the room without its IMU:
+        // 4.9 m off at 0.92, 0.65 s after its last tracked frame; at 10 Hz 2.06 m off at 1.0,
+        // 0.1 s after it, under a bound of 2 m + 2 m/s).
         Impl::LocalBound bound;
         bound.a = T_last.translation();
         bound.b = guess.translation().allFinite() ? guess.translation() : bound.a;
-        bound.radius_m =
-            std::max(o.min_radius_m + o.growth_m_s * since_s, o.local_depth_fraction * m.local_database_depth_m);
+        bound.radius_m = o.local_depth_fraction * depth_m + o.growth_m_s * since_s;
         TrackResult found;
-        Result<bool> searched = m.relocalize(*m.local_database, bound, gray, t_ns, std::nullopt, found, out);
+        Result<bool> searched =
+            m.relocalize(*m.local_database, bound, gray, t_ns, std::nullopt, found, out, &m.local_views);
         if (!searched.ok()) return searched.error();
         if (*searched) {
           m.adoptRelocalized(found, t_ns, gray, T_world_camera_guess ? std::nullopt : prediction, previous_t_ns, out);

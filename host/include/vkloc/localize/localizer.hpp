@@ -85,8 +85,9 @@ struct RelocalizationOptions {
   /// keyframes well on a room whose renders lack its lighting (cycles-room: the first within 1 m
   /// and 30 deg 72 % by the descriptor, 83 % by the peak, 90 % together; README).
   double rerank_bits_weight = 0.005;
-  /// After a loss: search on the frame that makes this many untracked frames in a row (tracked
-  /// frames neither lost nor bridged by the IMU). 0 = never relocalize after a loss.
+  /// After a loss: search the database on the frame that makes this many untracked frames in a
+  /// row (tracked frames neither lost nor bridged by the IMU). 0 = never search the database
+  /// after a loss (without a database: local_after_untracked_frames).
   int after_untracked_frames = 1;
   /// Radius of the region searched after a loss, around the motion prior's prediction: min_radius_m
   /// + growth_m_s x the seconds since the last tracked frame + 3 x the prediction's 1-sigma, doubled
@@ -170,10 +171,11 @@ struct RelocalizationOptions {
   /// local_tilts_deg about its horizontal one. They are made again after a tracked frame and when
   /// the prediction moves on by more than local_offset_fraction x the depth, and searched as a
   /// database's are while the loss is at most local_max_s old (a camera lost longer may be
-  /// anywhere). A pose found is taken only within min_radius_m + growth_m_s x the seconds since the
-  /// last tracked frame, or local_depth_fraction x the scene depth when more, of the path from the
-  /// last tracked position to the prediction's. With the IMU, only once the prediction's 3 sigma
-  /// exceeds local_offset_fraction x the scene depth. 0 headings: no search without a database.
+  /// anywhere). A pose found is taken only within local_depth_fraction x the scene depth (the
+  /// last tracked frame's) + growth_m_s x the seconds since the last tracked frame of the path
+  /// from the last tracked position to the prediction's. With the IMU, only once the
+  /// prediction's 3 sigma exceeds local_offset_fraction x that depth. 0 headings: no search
+  /// without a database.
   int local_headings = 12;
   std::vector<double> local_tilts_deg{-25.0, 0.0, 25.0};
   double local_offset_fraction = 0.1;
@@ -413,7 +415,8 @@ struct LocalizationResult {
   /// (RelocalizationOptions::confirm_start): state is kInitializing, T_world_camera that pose.
   bool confirming = false;
   /// Database keyframes aligned by a relocalization search on this frame (0: none ran), the
-  /// radius of its region (metres; infinite: the whole database) and its time (ms, in total_ms).
+  /// radius of its region (metres; infinite: the whole database; a local search's: its bound,
+  /// RelocalizationOptions::local_headings) and its time (ms, in total_ms).
   int relocalization_candidates = 0;
   /// Candidates whose render gave a start from matched point features (RelocalizationOptions::
   /// feature_starts).
@@ -421,7 +424,8 @@ struct LocalizationResult {
   /// Database index of the keyframe the search ranked first (nearest descriptor, re-ranked by
   /// the phase-correlation peak less RelocalizationOptions::rerank_bits_weight per bit of
   /// descriptor distance when rerank_candidates is on; -1: no search
-  /// ran or none lay in the region): the retrieval's answer, before any alignment.
+  /// ran or none lay in the region): the retrieval's answer, before any alignment. After a local
+  /// search, an index into the keyframes rendered for it.
   int64_t relocalization_top_keyframe = -1;
   double search_radius_m = 0;
   double relocalization_ms = 0;
