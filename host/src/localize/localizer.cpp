@@ -364,10 +364,9 @@ struct Localizer::Impl {
 
   /// Makes a keyframe at T_world_ref for this frame and waits for it.
   Status makeKeyframe(const Pose& T_world_ref, int64_t t_ns, LocalizationResult& out) {
-    KeyframeRequest request;
-    request.T_world_ref = T_world_ref;
-    request.t_ns = t_ns;
-    request.frame_index = frame_index;
+    // Built whole (not default-made and assigned): GCC 12 at -O1 with the sanitizers took the
+    // default pose's construction for a read of uninitialized memory (-Wmaybe-uninitialized).
+    const KeyframeRequest request{T_world_ref, t_ns, frame_index};
     VKLOC_TRY_STATUS(keyframes->makeNow(request, out.render_ms, out.reference_ms));
     out.reference_rendered = true;
     return uploadKeyframe();
