@@ -533,6 +533,17 @@ TEST(Relocalization, WithoutTheImuTheFrameAfterARelocalizedOneIsTakenOnlyWhenCon
   }
 }
 
+/// A Localizer of the asymmetric scene with no database, keyframes made synchronously, at
+/// localizeTruth(0).
+std::unique_ptr<Localizer> plainLocalizer(LocalizerOptions options) {
+  options.keyframe_threading = KeyframeThreading::kSynchronous;
+  auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
+  EXPECT_TRUE(created.ok()) << created.error().message;
+  if (!created.ok()) return nullptr;
+  (*created)->reset(test::localizeTruth(0));
+  return std::move(created).value();
+}
+
 TEST(Localizer, WithoutTheImuOrADatabaseAPoseIsTakenOnlyWhenVerified) {
   // No IMU, no database: nothing but the verification score checks a pose. Heavy clutter drawn
   // over the next frame (400 seeded strokes) pulls its alignment metres away at a score near 0.05:
@@ -541,12 +552,10 @@ TEST(Localizer, WithoutTheImuOrADatabaseAPoseIsTakenOnlyWhenVerified) {
   for (unsigned seed : {1u, 2u}) {
     for (const bool gate : {true, false}) {
       LocalizerOptions options;
-      options.keyframe_threading = KeyframeThreading::kSynchronous;
       if (!gate) options.verification.min_score = 0;
-      auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
-      ASSERT_TRUE(created.ok()) << created.error().message;
-      Localizer& localizer = **created;
-      localizer.reset(test::localizeTruth(0));
+      auto created = plainLocalizer(options);
+      ASSERT_TRUE(created);
+      Localizer& localizer = *created;
       const Result<LocalizationResult> first = localizer.localize(0, asymmetricFrame(0));
       ASSERT_TRUE(first.ok() && first->state == TrackingState::kTracking);
       const Result<LocalizationResult> next = localizer.localize(50'000'000, clutteredFrame(1, seed, 400));
@@ -581,12 +590,10 @@ TEST(Relocalization, WithoutADatabaseKeyframesRenderedAroundTheLastPoseFindAFast
   ASSERT_TRUE(view.ok()) << view.error().message;
   for (const bool local : {true, false}) {
     LocalizerOptions options;
-    options.keyframe_threading = KeyframeThreading::kSynchronous;
     if (!local) options.relocalization.local_headings = 0;
-    auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
-    ASSERT_TRUE(created.ok()) << created.error().message;
-    Localizer& localizer = **created;
-    localizer.reset(test::localizeTruth(0));
+    auto created = plainLocalizer(options);
+    ASSERT_TRUE(created);
+    Localizer& localizer = *created;
     int64_t t = 0;
     for (int i = 0; i < 3; ++i, t += 50'000'000) {
       const Result<LocalizationResult> r = localizer.localize(t, asymmetricFrame(i));

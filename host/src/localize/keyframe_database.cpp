@@ -452,6 +452,13 @@ Result<std::vector<Eigen::Vector3d>> placementPositions(const KeyframePlacement&
   return positions;
 }
 
+PinholeCamera keyframeViewCamera(const PinholeCamera& camera) {
+  const int width =
+      std::max(2 * kThumbnailWidth,
+               static_cast<int>(std::ceil(2.0 * kThumbnailHeight * camera.width / std::max(1, camera.height))));
+  return scaledCamera(camera, width);
+}
+
 Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::vector<Renderer*>& renderers,
                                                const PinholeCamera& camera, const KeyframePlacement& placement,
                                                const RenderSettings& render,
@@ -464,13 +471,7 @@ Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::ve
   if (renderers.empty() || std::find(renderers.begin(), renderers.end(), nullptr) != renderers.end()) {
     return makeError(ErrorCode::kInvalidArgument, "keyframe database: need at least one renderer (and no null one)");
   }
-  // Views are rendered 160 pixels wide (the thumbnail is 80x64; twice that averages the render's
-  // aliasing away as a camera's optics do).
-  // (Wider for a camera wider than 2.5:1, so that the view is at least 128 rows high.)
-  const int width =
-      std::max(2 * kThumbnailWidth,
-               static_cast<int>(std::ceil(2.0 * kThumbnailHeight * camera.width / std::max(1, camera.height))));
-  const PinholeCamera small = scaledCamera(camera, width);
+  const PinholeCamera small = keyframeViewCamera(camera);
   RenderSettings look = render;
   // One thread per renderer already: a CPU renderer's bands would only nest threads.
   if (renderers.size() > 1) look.threads = 1;

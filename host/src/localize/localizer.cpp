@@ -735,12 +735,7 @@ struct Localizer::Impl {
                                          double scene_depth_m, std::vector<ImageU8>& views, LocalizationResult& out) {
     const RelocalizationOptions& o = options.relocalization;
     const auto t0 = SteadyClock::now();
-    // 160 pixels wide as a database's views, wider for a camera wider than 2.5:1 (at least 128
-    // rows: the descriptor's thumbnail is 80x64).
-    const int width =
-        std::max(2 * kThumbnailWidth,
-                 static_cast<int>(std::ceil(2.0 * kThumbnailHeight * camera.width / std::max(1, camera.height))));
-    const PinholeCamera small = scaledCamera(camera, width);
+    const PinholeCamera small = keyframeViewCamera(camera);  // as a database's views
     const size_t pixels = static_cast<size_t>(small.width) * small.height;
     KeyframeDatabase db(model_fingerprint, camera);
     views.clear();

@@ -159,6 +159,11 @@ struct KeyframePlacement {
   double corridor_radius_m = 0;  ///< Metres (> 0 with a corridor).
 };
 
+/// The camera a keyframe database's views are rendered with: `camera` scaled to 160 pixels wide
+/// (twice the descriptor's thumbnail, which averages the render's aliasing away as optics do),
+/// wider for a camera wider than 2.5:1 so that the view is at least 128 rows high.
+PinholeCamera keyframeViewCamera(const PinholeCamera& camera);
+
 /// Checks the placement: a non-empty finite volume, spacing > 0, a unit-able up vector, headings
 /// in 1..360, tilts in -90..90, fractions in 0..1, a finite corridor with a radius > 0 and the
 /// view count at most max_views.
