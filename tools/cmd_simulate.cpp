@@ -204,7 +204,7 @@ static void addSimulateVerb(CLI::App& app) {
   args->camera.add(*cmd);
   args->device.add(*cmd);
   cmd->add_option("--trajectory,-t", args->trajectory,
-                  "drone | drone_agile | handheld | aggressive | orbit (default by model or scenario)");
+                  "drone | drone_agile | drone_acro | handheld | aggressive | orbit (default by model or scenario)");
   cmd->add_option("--lens", args->lens,
                   "pinhole (640x480) | radtan (the same, barrel distortion) | fisheye (800x800, 210 deg)");
   cmd->add_option("--duration", args->duration_s, "Trajectory length, seconds")->capture_default_str();

@@ -53,8 +53,7 @@ SplineTrajectory makeKind(TrajectoryKind kind, double duration_s, uint64_t seed,
   o.duration_s = duration_s;
   o.seed = seed;
   o.T_body_camera = T_body_camera;
-  const bool outdoor =
-      kind == TrajectoryKind::kDroneFlight || kind == TrajectoryKind::kDroneAgile || kind == TrajectoryKind::kOrbit;
+  const bool outdoor = isDroneKind(kind) || kind == TrajectoryKind::kOrbit;
   const Aabb& bounds = outdoor ? kCity : kRoom;
   auto t = makeTrajectory(o, bounds);
   EXPECT_TRUE(t.ok()) << (t.ok() ? "" : t.error().message);
@@ -85,7 +84,8 @@ std::vector<Pose> randomControls(size_t n, uint64_t seed) {
 }
 
 const TrajectoryKind kAllKinds[] = {TrajectoryKind::kDroneFlight, TrajectoryKind::kDroneAgile,
-                                    TrajectoryKind::kHandheld, TrajectoryKind::kAggressive, TrajectoryKind::kOrbit};
+                                    TrajectoryKind::kHandheld,    TrajectoryKind::kAggressive,
+                                    TrajectoryKind::kOrbit,       TrajectoryKind::kDroneAcro};
 
 // ------------------------------------------------------------------------------------------------
 // (1) Exact derivatives against central finite differences of evaluate().
@@ -481,7 +481,7 @@ TEST(Generators, DroneFliesOverTheCityNotThroughIt) {
   const auto under = HeightField::fromModel(city, 1.0);
   ASSERT_TRUE(obstacles.ok() && under.ok());
   double lowest_without = 1e9;
-  for (TrajectoryKind kind : {TrajectoryKind::kDroneFlight, TrajectoryKind::kDroneAgile}) {
+  for (TrajectoryKind kind : {TrajectoryKind::kDroneFlight, TrajectoryKind::kDroneAgile, TrajectoryKind::kDroneAcro}) {
     for (uint64_t seed : {1u, 2u, 3u}) {
       SCOPED_TRACE(seed);
       TrajectoryOptions o;
@@ -577,23 +577,34 @@ TEST(Generators, OrbitCirclesTheCentreLookingAtIt) {
 }
 
 TEST(Generators, AgileDroneRollsAndPitchesFast) {
-  // The agile drone's airframe tilts by up to ~25 deg at up to ~3 rad/s; the plain drone's does not.
+  // The agile drone's airframe tilts by up to ~25 deg at up to ~3 rad/s, the acro drone's twice
+  // as far and as fast along the same path; the plain drone's does not tilt.
   const SplineTrajectory agile = makeKind(TrajectoryKind::kDroneAgile, 20.0, 3, mounting());
+  const SplineTrajectory acro = makeKind(TrajectoryKind::kDroneAcro, 20.0, 3, mounting());
   const SplineTrajectory calm = makeKind(TrajectoryKind::kDroneFlight, 20.0, 3, mounting());
-  double tilt_agile = 0, tilt_calm = 0, rate_agile = 0;
+  // The camera's tilt from its nominal 45 deg down, degrees.
+  auto tilt = [](const TrajectoryState& s) {
+    const Pose T = s.T_world_body * mounting();
+    return std::abs(std::asin(-T.linear()(2, 2)) / kDeg - 45.0);
+  };
+  double tilt_agile = 0, tilt_acro = 0, tilt_calm = 0, rate_agile = 0, rate_acro = 0;
   for (int64_t t = agile.startNs(); t <= agile.endNs(); t += 20000000) {
-    const TrajectoryState a = agile.evaluate(t), c = calm.evaluate(t);
-    // The camera's tilt from its nominal 45 deg down, degrees.
-    const Pose Ta = a.T_world_body * mounting(), Tc = c.T_world_body * mounting();
-    tilt_agile = std::max(tilt_agile, std::abs(std::asin(-Ta.linear()(2, 2)) / kDeg - 45.0));
-    tilt_calm = std::max(tilt_calm, std::abs(std::asin(-Tc.linear()(2, 2)) / kDeg - 45.0));
+    const TrajectoryState a = agile.evaluate(t), x = acro.evaluate(t), c = calm.evaluate(t);
+    tilt_agile = std::max(tilt_agile, tilt(a));
+    tilt_acro = std::max(tilt_acro, tilt(x));
+    tilt_calm = std::max(tilt_calm, tilt(c));
     rate_agile = std::max(rate_agile, a.omega_body.norm());
+    rate_acro = std::max(rate_acro, x.omega_body.norm());
   }
   EXPECT_GT(tilt_agile, 12.0);
   EXPECT_LT(tilt_agile, 40.0);
+  EXPECT_GT(tilt_acro, 1.6 * tilt_agile);
+  EXPECT_LT(tilt_acro, 80.0);
   EXPECT_LT(tilt_calm, 1.0);
   EXPECT_GT(rate_agile, 1.5);
   EXPECT_LT(rate_agile, 5.0);
+  EXPECT_GT(rate_acro, 1.6 * rate_agile);
+  EXPECT_LT(rate_acro, 10.0);
 }
 
 TEST(Generators, DeterministicInSeedAndValidated) {

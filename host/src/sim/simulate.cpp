@@ -99,7 +99,7 @@ Pose defaultBodyCamera(TrajectoryKind kind) {
   // Body: x forward, y left, z up. Columns of R_body_camera are the camera axes in the body.
   Pose T = Pose::Identity();
   Eigen::Matrix3d R;
-  if (kind == TrajectoryKind::kDroneFlight || kind == TrajectoryKind::kDroneAgile) {
+  if (isDroneKind(kind)) {
     const double c = std::cos(kPi / 4), s = std::sin(kPi / 4);
     // Camera z = forward and 45 deg down, x = right (-y), y = z x x (down and back).
     R.col(2) = Eigen::Vector3d(c, 0, -s);
@@ -306,7 +306,7 @@ Result<SplineTrajectory> simulationTrajectory(const SimulationOptions& options, 
 
 Result<SplineTrajectory> simulationTrajectory(const SimulationOptions& options, const Model& model) {
   TrajectoryOptions t = trajectoryOptions(options);
-  if (t.kind == TrajectoryKind::kDroneFlight || t.kind == TrajectoryKind::kDroneAgile) {
+  if (isDroneKind(t.kind)) {
     // A drone flies over the buildings, not through them: 10 m above anything within 5 m.
     auto obstacles = HeightField::fromModel(model, 5.0);
     if (!obstacles.ok()) return obstacles.error();

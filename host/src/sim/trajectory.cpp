@@ -114,7 +114,7 @@ KnotTimes makeKnots(double duration_s, double nominal_dt_s) {
 /// above `options.obstacles`, horizontal speed 3.5-7 m/s, heading along the path, camera 45 deg
 /// below the horizon.
 Result<std::vector<Pose>> droneCameraPoses(const BoxFrame& box, const KnotTimes& knots, Mt19937& rnd,
-                                           const TrajectoryOptions& options, bool agile = false) {
+                                           const TrajectoryOptions& options, double tilt_scale = 0.0) {
   const Eigen::Vector3d c = box.centre();
   const Eigen::Vector3d h = box.half();
   const double ax = 0.65 * h.x();
@@ -144,8 +144,9 @@ Result<std::vector<Pose>> droneCameraPoses(const BoxFrame& box, const KnotTimes&
   const double z1 = rnd.uniform(0.0, 2.0 * kPi);
   const double z2 = rnd.uniform(0.0, 2.0 * kPi);
   const double pitch = -kPi / 4.0;
-  // Agile: the airframe rolls and pitches about its heading (two sines each, 0.5-1.3 Hz, up to
-  // about 25 deg and 3 rad/s), as a multirotor does when it manoeuvres or fights gusts.
+  // Agile (tilt_scale 1): the airframe rolls and pitches about its heading (two sines each, 0.5-1.3
+  // Hz, up to about 25 deg and 3 rad/s), as a multirotor does when it manoeuvres or fights gusts;
+  // acro (tilt_scale 2) twice as far and as fast. The draws are the same for both.
   const double roll1 = rnd.uniform(0.25, 0.35), roll2 = rnd.uniform(0.06, 0.1);
   const double pitch1 = rnd.uniform(0.2, 0.3), pitch2 = rnd.uniform(0.05, 0.09);
   const double fr1 = rnd.uniform(0.5, 0.8), fr2 = rnd.uniform(1.0, 1.3);
@@ -191,9 +192,11 @@ Result<std::vector<Pose>> droneCameraPoses(const BoxFrame& box, const KnotTimes&
     if (!R.ok()) return R.error();
     Pose T = Pose::Identity();
     T.linear() = *R;
-    if (agile) {
-      const double roll = roll1 * std::sin(2.0 * kPi * fr1 * t + pr1) + roll2 * std::sin(2.0 * kPi * fr2 * t + pr2);
-      const double tilt = pitch1 * std::sin(2.0 * kPi * fp1 * t + pp1) + pitch2 * std::sin(2.0 * kPi * fp2 * t + pp2);
+    if (tilt_scale > 0.0) {
+      const double roll =
+          tilt_scale * (roll1 * std::sin(2.0 * kPi * fr1 * t + pr1) + roll2 * std::sin(2.0 * kPi * fr2 * t + pr2));
+      const double tilt =
+          tilt_scale * (pitch1 * std::sin(2.0 * kPi * fp1 * t + pp1) + pitch2 * std::sin(2.0 * kPi * fp2 * t + pp2));
       const Eigen::Vector3d forward(std::cos(yaw), std::sin(yaw), 0.0);
       const Eigen::Vector3d left(-std::sin(yaw), std::cos(yaw), 0.0);
       const Eigen::Matrix3d wobble =
@@ -431,11 +434,13 @@ TrajectoryState SplineTrajectory::evaluate(int64_t t_ns) const {
 Result<TrajectoryKind> parseTrajectoryKind(const std::string& name) {
   if (name == "drone") return TrajectoryKind::kDroneFlight;
   if (name == "drone_agile") return TrajectoryKind::kDroneAgile;
+  if (name == "drone_acro") return TrajectoryKind::kDroneAcro;
   if (name == "handheld") return TrajectoryKind::kHandheld;
   if (name == "aggressive") return TrajectoryKind::kAggressive;
   if (name == "orbit") return TrajectoryKind::kOrbit;
-  return makeError(ErrorCode::kInvalidArgument,
-                   "trajectory kind '" + name + "' is unknown (use drone, drone_agile, handheld, aggressive or orbit)");
+  return makeError(
+      ErrorCode::kInvalidArgument,
+      "trajectory kind '" + name + "' is unknown (use drone, drone_agile, drone_acro, handheld, aggressive or orbit)");
 }
 
 const char* trajectoryKindName(TrajectoryKind kind) {
@@ -444,6 +449,8 @@ const char* trajectoryKindName(TrajectoryKind kind) {
       return "drone";
     case TrajectoryKind::kDroneAgile:
       return "drone_agile";
+    case TrajectoryKind::kDroneAcro:
+      return "drone_acro";
     case TrajectoryKind::kHandheld:
       return "handheld";
     case TrajectoryKind::kAggressive:
@@ -452,6 +459,11 @@ const char* trajectoryKindName(TrajectoryKind kind) {
       return "orbit";
   }
   return "unknown";
+}
+
+bool isDroneKind(TrajectoryKind kind) {
+  return kind == TrajectoryKind::kDroneFlight || kind == TrajectoryKind::kDroneAgile ||
+         kind == TrajectoryKind::kDroneAcro;
 }
 
 Result<HeightField> HeightField::fromModel(const Model& model, double radius_m, double cell_m) {
@@ -537,7 +549,10 @@ Result<SplineTrajectory> makeTrajectory(const TrajectoryOptions& options, const 
       cameras = droneCameraPoses(box, knots, rnd, options);
       break;
     case TrajectoryKind::kDroneAgile:
-      cameras = droneCameraPoses(box, knots, rnd, options, true);
+      cameras = droneCameraPoses(box, knots, rnd, options, 1.0);
+      break;
+    case TrajectoryKind::kDroneAcro:
+      cameras = droneCameraPoses(box, knots, rnd, options, 2.0);
       break;
     case TrajectoryKind::kHandheld:
       cameras = walkCameraPoses(box, knots, rnd, WalkParams{});

@@ -46,10 +46,13 @@ enum class TrajectoryKind {
   kHandheld,     ///< Walking pace, 1.2-1.8 m high, gentle head motion (room).
   kAggressive,   ///< Fast rotations (up to ~3 rad/s) and accelerations, handheld scale.
   kOrbit,        ///< Circle around the scene centre looking at it.
+  kDroneAcro,    ///< The agile drone's path with twice its roll and pitch (up to ~50 deg, ~6 rad/s).
 };
-/// Parses "drone", "drone_agile", "handheld", "aggressive", "orbit".
+/// Parses "drone", "drone_agile", "drone_acro", "handheld", "aggressive", "orbit".
 Result<TrajectoryKind> parseTrajectoryKind(const std::string& name);
 const char* trajectoryKindName(TrajectoryKind kind);
+/// The drone kinds: flight, agile, acro (a camera mounted 45 deg down, flying over buildings).
+bool isDroneKind(TrajectoryKind kind);
 
 /// The scene's highest geometry seen from above, for drones to fly over: a grid over the model's
 /// xy extent (world frame, z up) whose cells hold the largest z (metres) of any triangle whose xy
