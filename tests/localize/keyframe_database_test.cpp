@@ -624,6 +624,79 @@ TEST(Relocalization, WithoutADatabaseKeyframesRenderedAroundTheLastPoseFindAFast
   }
 }
 
+TEST(Relocalization, WithoutTheImuALocalSearchsPoseGoesOnAtTheVelocitySinceTheLastTrackedOne) {
+  // No IMU, no database: three frames tracked, a black one, then a view turned 40 deg (found by
+  // the local search). The motion from the last tracked pose to the found one, over the 0.1 s
+  // between them, is the camera's velocity: the black frame after it reports the prediction, the
+  // found pose moved on by that velocity over 50 ms. (Before, a found pose restarted the motion
+  // at rest, and a camera walking on was searched for where it had been found.)
+  Pose turned = test::localizeTruth(3);
+  turned.linear() =
+      turned.linear() * Eigen::AngleAxisd(40.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  auto view = renderReference(test::makeAsymmetricScene(), test::localizeCamera(), turned);
+  ASSERT_TRUE(view.ok()) << view.error().message;
+  auto created = plainLocalizer(LocalizerOptions{});
+  ASSERT_TRUE(created);
+  Localizer& localizer = *created;
+  const ImageU8 black(320, 240, 1, 0);
+  Pose last_tracked = Pose::Identity();
+  for (int i = 0; i < 3; ++i) {
+    const Result<LocalizationResult> r = localizer.localize(i * 50'000'000, asymmetricFrame(i));
+    ASSERT_TRUE(r.ok() && r->state == TrackingState::kTracking) << i;
+    last_tracked = r->T_world_camera;
+  }
+  ASSERT_TRUE(localizer.localize(150'000'000, black).ok());
+  const Result<LocalizationResult> found = localizer.localize(200'000'000, view->gray);
+  ASSERT_TRUE(found.ok()) << found.error().message;
+  ASSERT_EQ(found->state, TrackingState::kRelocalized) << "score " << found->verify_score;
+  const Eigen::Vector3d v_world = (found->T_world_camera.translation() - last_tracked.translation()) / 0.1;
+  ASSERT_GT(v_world.norm() * 0.05, 5e-3) << "the scene's camera moves enough to tell";
+  const Result<LocalizationResult> after = localizer.localize(250'000'000, black);
+  ASSERT_TRUE(after.ok()) << after.error().message;
+  EXPECT_EQ(after->state, TrackingState::kLost);
+  EXPECT_LT((after->T_world_camera.translation() - (found->T_world_camera.translation() + 0.05 * v_world)).norm(),
+            1e-6);
+}
+
+TEST(Relocalization, WithoutTheImuAFrameAfterALostOneIsTakenOnlyWhenConfidentlyVerified) {
+  // No IMU, no search (local_headings 0): after a lost frame the guess is the motion from before
+  // the loss carried across it, and only the verification score checks the alignment from it.
+  // Clutter drawn over the frame after a black one lowers its score between tracking's and the
+  // confident one: lost. The control, the confident score set to tracking's, tracks it; so does
+  // the rule for the same frame with no black frame before it. A clean frame after it is tracked.
+  const ImageU8 cluttered = clutteredFrame(2, 7);
+  const LocalizerOptions defaults;
+  for (const int variant : {0, 1, 2}) {  // the rule; the control; no lost frame before
+    LocalizerOptions options;
+    options.relocalization.local_headings = 0;
+    if (variant == 1) options.motion_search_confident_score = defaults.verification.min_score;
+    auto created = plainLocalizer(options);
+    ASSERT_TRUE(created);
+    Localizer& localizer = *created;
+    for (int i = 0; i < 2; ++i) {
+      const bool lost = i == 1 && variant != 2;
+      const Result<LocalizationResult> r =
+          localizer.localize(i * 50'000'000, lost ? ImageU8(320, 240, 1, 0) : asymmetricFrame(i));
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      ASSERT_EQ(r->state, lost ? TrackingState::kLost : TrackingState::kTracking) << i;
+    }
+    const Result<LocalizationResult> next = localizer.localize(100'000'000, cluttered);
+    ASSERT_TRUE(next.ok()) << next.error().message;
+    EXPECT_GE(next->verify_score, defaults.verification.min_score) << variant;
+    EXPECT_LT(next->verify_score, defaults.motion_search_confident_score) << variant;
+    if (variant == 0) {
+      EXPECT_EQ(next->state, TrackingState::kLost) << "score " << next->verify_score;
+    } else {
+      EXPECT_EQ(next->state, TrackingState::kTracking) << variant << ": score " << next->verify_score;
+      EXPECT_LT(test::translationError(next->T_world_camera, test::localizeTruth(2)), 0.01) << variant;
+    }
+    const Result<LocalizationResult> after = localizer.localize(150'000'000, asymmetricFrame(3));
+    ASSERT_TRUE(after.ok()) << after.error().message;
+    EXPECT_EQ(after->state, TrackingState::kTracking) << variant;
+    EXPECT_LT(test::translationError(after->T_world_camera, test::localizeTruth(3)), 5e-3) << variant;
+  }
+}
+
 TEST(Relocalization, RecoversAfterBlackFramesAndAJumpWithoutSearchingBlackOnes) {
   auto localizer = relocalizer(KeyframeThreading::kSynchronous);
   ASSERT_TRUE(localizer);

@@ -1137,18 +1137,27 @@ struct Localizer::Impl {
   /// a prior that bridged the loss keeps its velocity.
   void adoptRelocalized(const TrackResult& track, int64_t t_ns, const ImageU8& gray,
                         const std::optional<MotionPrediction>& prediction, std::optional<int64_t> previous_t_ns,
-                        LocalizationResult& out) {
+                        LocalizationResult& out, bool local_search = false) {
     const Keyframe& keyframe = *keyframes->current();
     const bool agrees = prediction && prediction->inertial &&
                         motion->consistent(*prediction, filterPose(track), track.covariance, keyframe.scene_depth_m);
     if (!agrees) {
       // The velocity from the previous frame when that one was relocalized too (a search that
       // goes on frame after frame), else unknown (a pose tracked before a jump is no reference).
+      // A local search's pose lies within its bound of the last tracked one (no jump): the
+      // motion from that one over the time between them (a few frames: errors of a centimetre
+      // over 0.1-0.5 s) is the velocity. Without it a camera found again after a loss is
+      // predicted at rest, and when the next frame is lost too (the frame after a relocalized one
+      // must verify confidently without the IMU) the search's views wait where it was found while
+      // it moves on (the room without its IMU, walking at 2.5 m/s: 17 frames lost in a row).
       std::optional<Eigen::Vector3d> v_world;
       if (last_tracked_gray && previous_t_ns && last_relocalized_t_ns == previous_t_ns &&
           last_tracked_gray->t_ns == *previous_t_ns && t_ns > *previous_t_ns) {
         v_world = (track.T_world_camera.translation() - last_tracked_gray->T_world_camera.translation()) /
                   (static_cast<double>(t_ns - *previous_t_ns) * 1e-9);
+      } else if (local_search && last_tracked_gray && t_ns > last_tracked_gray->t_ns) {
+        v_world = (track.T_world_camera.translation() - last_tracked_gray->T_world_camera.translation()) /
+                  (static_cast<double>(t_ns - last_tracked_gray->t_ns) * 1e-9);
       }
       restartPrior(track.T_world_camera, v_world, t_ns);
     }
@@ -1762,13 +1771,15 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // a 3 m jump: the frame after a relocalized one slid 0.34 m across a window's plain frame and
   // verified at 0.28; the city after a 5 m jump, after six frames relocalized in a row, one
   // tracked 0.54 m off at 0.16).
-  const bool blind_after_relocalized =
-      prediction && !prediction->inertial && previous_t_ns && m.last_relocalized_t_ns == previous_t_ns;
+  // So is a frame after lost ones: its guess is the motion before the loss carried across it (at
+  // 5 Hz, after 7 frames lost, the room's frame 12 tracked 4.4 m and 173 deg off at 0.21).
+  const bool blind_guess = prediction && !prediction->inertial &&
+                           ((previous_t_ns && m.last_relocalized_t_ns == previous_t_ns) || m.untracked > 0);
   // Without an IMU (no reading since the start) nothing else checks a pose: it is taken only when
   // verified too, database or not (taken, a pose metres off was reported as tracked and tracked on: the
   // room without its IMU, after its 190 deg/s turn at frame 86, 2-3 m off at scores 0-0.12).
   if ((m.database || !m.last_imu) && track.state == TrackingState::kTracking &&
-      out.verify_score < m.minTakenScore(blind_after_relocalized)) {
+      out.verify_score < m.minTakenScore(blind_guess)) {
     track.state = TrackingState::kLost;
     out.state = TrackingState::kLost;
   }
@@ -1961,7 +1972,8 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
             m.relocalize(*m.local_database, bound, gray, t_ns, std::nullopt, found, out, &m.local_views);
         if (!searched.ok()) return searched.error();
         if (*searched) {
-          m.adoptRelocalized(found, t_ns, gray, T_world_camera_guess ? std::nullopt : prediction, previous_t_ns, out);
+          m.adoptRelocalized(found, t_ns, gray, T_world_camera_guess ? std::nullopt : prediction, previous_t_ns, out,
+                             true);
         } else {
           ++m.failed_searches;
         }
