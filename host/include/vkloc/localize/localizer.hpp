@@ -305,7 +305,9 @@ struct LocalizerOptions {
   double motion_search_feature_attitude_sigmas = 2.5;
   /// The motion search keeps the best verified result of its starts and stops at one whose
   /// verification score reaches this (true poses of the development sequences score 0.5-1);
-  /// while the prior's velocity is unobserved, at motion_search_start_score if higher.
+  /// while the prior's velocity is unobserved, at motion_search_start_score if higher. Without
+  /// the IMU it is also the score a tracked pose needs on the frame after a relocalized one or
+  /// after lost ones (its guess is a searched pose, or a motion carried across the loss).
   double motion_search_confident_score = 0.5;
   /// The first frame after an inertial start at an unknown velocity sets the filter's velocity
   /// for the frames to come, and the plain alignment starts from the pose of the frame before (no
