@@ -1144,9 +1144,11 @@ struct Localizer::Impl {
     if (!agrees) {
       // The velocity from the previous frame when that one was relocalized too (a search that
       // goes on frame after frame), else unknown (a pose tracked before a jump is no reference).
-      // A local search's pose lies within its bound of the last tracked one (no jump): the
-      // motion from that one over the time between them (a few frames: errors of a centimetre
-      // over 0.1-0.5 s) is the velocity. Without it a camera found again after a loss is
+      // Without the IMU, a local search's pose lies within its bound of the last tracked one (no
+      // jump): the motion from that one over the time between them (a few frames: errors of a
+      // centimetre over 0.1-0.5 s) is the velocity. (With it the filter restarts at an unknown
+      // velocity: the search runs only after a long bridge, and an average over it is no
+      // better.) Without it a camera found again after a loss is
       // predicted at rest, and when the next frame is lost too (the frame after a relocalized one
       // must verify confidently without the IMU) the search's views wait where it was found while
       // it moves on (the room without its IMU, walking at 2.5 m/s: 17 frames lost in a row).
@@ -1155,7 +1157,7 @@ struct Localizer::Impl {
           last_tracked_gray->t_ns == *previous_t_ns && t_ns > *previous_t_ns) {
         v_world = (track.T_world_camera.translation() - last_tracked_gray->T_world_camera.translation()) /
                   (static_cast<double>(t_ns - *previous_t_ns) * 1e-9);
-      } else if (local_search && last_tracked_gray && t_ns > last_tracked_gray->t_ns) {
+      } else if (local_search && !last_imu && last_tracked_gray && t_ns > last_tracked_gray->t_ns) {
         v_world = (track.T_world_camera.translation() - last_tracked_gray->T_world_camera.translation()) /
                   (static_cast<double>(t_ns - last_tracked_gray->t_ns) * 1e-9);
       }
@@ -1771,10 +1773,18 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // a 3 m jump: the frame after a relocalized one slid 0.34 m across a window's plain frame and
   // verified at 0.28; the city after a 5 m jump, after six frames relocalized in a row, one
   // tracked 0.54 m off at 0.16).
-  // So is a frame after lost ones: its guess is the motion before the loss carried across it (at
-  // 5 Hz, after 7 frames lost, the room's frame 12 tracked 4.4 m and 173 deg off at 0.21).
+  // So is a frame after lost ones, guessed by the motion before the loss carried across it (at
+  // 5 Hz, after 7 frames lost, the room's frame 12 tracked 4.4 m and 173 deg off at 0.21), while
+  // a search can find it instead (a database, or the local search's time since the last tracked
+  // frame): with none, imagery whose true poses verify below the confident score would never be
+  // tracked again. A caller's guess is not the carried motion.
+  const RelocalizationOptions& ro = m.options.relocalization;
+  const bool can_search =
+      m.database || (ro.local_headings > 0 && !ro.local_tilts_deg.empty() && m.last_tracked_gray &&
+                     m.last_tracked_t_ns && static_cast<double>(t_ns - *m.last_tracked_t_ns) * 1e-9 <= ro.local_max_s);
   const bool blind_guess = prediction && !prediction->inertial &&
-                           ((previous_t_ns && m.last_relocalized_t_ns == previous_t_ns) || m.untracked > 0);
+                           ((previous_t_ns && m.last_relocalized_t_ns == previous_t_ns) ||
+                            (m.untracked > 0 && can_search && !T_world_camera_guess));
   // Without an IMU (no reading since the start) nothing else checks a pose: it is taken only when
   // verified too, database or not (taken, a pose metres off was reported as tracked and tracked on: the
   // room without its IMU, after its 190 deg/s turn at frame 86, 2-3 m off at scores 0-0.12).

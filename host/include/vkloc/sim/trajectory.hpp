@@ -46,7 +46,7 @@ enum class TrajectoryKind {
   kHandheld,     ///< Walking pace, 1.2-1.8 m high, gentle head motion (room).
   kAggressive,   ///< Fast rotations (up to ~3 rad/s) and accelerations, handheld scale.
   kOrbit,        ///< Circle around the scene centre looking at it.
-  kDroneAcro,    ///< The agile drone's path with twice its roll and pitch (up to ~50 deg, ~6 rad/s).
+  kDroneAcro,    ///< The agile drone's path and swings, twice as far and fast (up to ~45 deg, ~4.5 rad/s).
 };
 /// Parses "drone", "drone_agile", "drone_acro", "handheld", "aggressive", "orbit".
 Result<TrajectoryKind> parseTrajectoryKind(const std::string& name);
