@@ -1144,14 +1144,13 @@ struct Localizer::Impl {
     if (!agrees) {
       // The velocity from the previous frame when that one was relocalized too (a search that
       // goes on frame after frame), else unknown (a pose tracked before a jump is no reference).
-      // Without the IMU, a local search's pose lies within its bound of the last tracked one (no
-      // jump): the motion from that one over the time between them (a few frames: errors of a
-      // centimetre over 0.1-0.5 s) is the velocity. (With it the filter restarts at an unknown
-      // velocity: the search runs only after a long bridge, and an average over it is no
-      // better.) Without it a camera found again after a loss is
-      // predicted at rest, and when the next frame is lost too (the frame after a relocalized one
-      // must verify confidently without the IMU) the search's views wait where it was found while
-      // it moves on (the room without its IMU, walking at 2.5 m/s: 17 frames lost in a row).
+      // Without the IMU a local search's pose lies within its bound of the last tracked one (no
+      // jump), and the motion from that one over the time between them (a few frames: errors of
+      // a centimetre over 0.1-0.5 s) is the velocity; at rest instead, a camera found again whose
+      // next frame is lost too (the frame after a relocalized one must verify confidently without
+      // the IMU) is searched for where it was found while it moves on (the room without its IMU,
+      // walking at 2.5 m/s: 17 frames lost in a row). With the IMU the search runs only after a
+      // long bridge and the filter restarts at an unknown velocity, as after a database's search.
       std::optional<Eigen::Vector3d> v_world;
       if (last_tracked_gray && previous_t_ns && last_relocalized_t_ns == previous_t_ns &&
           last_tracked_gray->t_ns == *previous_t_ns && t_ns > *previous_t_ns) {
