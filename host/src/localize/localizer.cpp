@@ -427,6 +427,19 @@ struct Localizer::Impl {
 
   /// The verification score a pose needs: tracking's, or while the motion prior's velocity is
   /// unobserved (the pose taken sets it) at least motion_search_confident_score.
+  /// Seconds from the last tracked frame to t_ns (0 when none).
+  double sinceTrackedS(int64_t t_ns) const {
+    return last_tracked_t_ns ? static_cast<double>(t_ns - *last_tracked_t_ns) * 1e-9 : 0.0;
+  }
+
+  /// Whether the local search (RelocalizationOptions::local_headings) may run at t_ns: it is on,
+  /// and a tracked pose to search around lies within local_max_s.
+  bool localSearchInReach(int64_t t_ns) const {
+    const RelocalizationOptions& o = options.relocalization;
+    return o.local_headings > 0 && !o.local_tilts_deg.empty() && last_tracked_gray &&
+           sinceTrackedS(t_ns) <= o.local_max_s;
+  }
+
   double minTakenScore(bool velocity_unobserved) const {
     return velocity_unobserved ? std::max(options.verification.min_score, options.motion_search_confident_score)
                                : options.verification.min_score;
@@ -1151,12 +1164,10 @@ struct Localizer::Impl {
       // the IMU) is searched for where it was found while it moves on (the room without its IMU,
       // walking at 2.5 m/s: 17 frames lost in a row). With the IMU the search runs only after a
       // long bridge and the filter restarts at an unknown velocity, as after a database's search.
+      const bool after_relocalized = previous_t_ns && last_relocalized_t_ns == previous_t_ns && last_tracked_gray &&
+                                     last_tracked_gray->t_ns == *previous_t_ns;
       std::optional<Eigen::Vector3d> v_world;
-      if (last_tracked_gray && previous_t_ns && last_relocalized_t_ns == previous_t_ns &&
-          last_tracked_gray->t_ns == *previous_t_ns && t_ns > *previous_t_ns) {
-        v_world = (track.T_world_camera.translation() - last_tracked_gray->T_world_camera.translation()) /
-                  (static_cast<double>(t_ns - *previous_t_ns) * 1e-9);
-      } else if (local_search && !last_imu && last_tracked_gray && t_ns > last_tracked_gray->t_ns) {
+      if (last_tracked_gray && t_ns > last_tracked_gray->t_ns && (after_relocalized || (local_search && !last_imu))) {
         v_world = (track.T_world_camera.translation() - last_tracked_gray->T_world_camera.translation()) /
                   (static_cast<double>(t_ns - last_tracked_gray->t_ns) * 1e-9);
       }
@@ -1777,10 +1788,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // a search can find it instead (a database, or the local search's time since the last tracked
   // frame): with none, imagery whose true poses verify below the confident score would never be
   // tracked again. A caller's guess is not the carried motion.
-  const RelocalizationOptions& ro = m.options.relocalization;
-  const bool can_search =
-      m.database || (ro.local_headings > 0 && !ro.local_tilts_deg.empty() && m.last_tracked_gray &&
-                     m.last_tracked_t_ns && static_cast<double>(t_ns - *m.last_tracked_t_ns) * 1e-9 <= ro.local_max_s);
+  const bool can_search = m.database || m.localSearchInReach(t_ns);
   const bool blind_guess = prediction && !prediction->inertial &&
                            ((previous_t_ns && m.last_relocalized_t_ns == previous_t_ns) ||
                             (m.untracked > 0 && can_search && !T_world_camera_guess));
@@ -1938,9 +1946,8 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   } else {
     ++m.untracked;
     const RelocalizationOptions& o = m.options.relocalization;
-    const double since_s = m.last_tracked_t_ns ? static_cast<double>(t_ns - *m.last_tracked_t_ns) * 1e-9 : 0.0;
-    if (!m.database && o.local_headings > 0 && !o.local_tilts_deg.empty() &&
-        m.untracked >= o.local_after_untracked_frames && m.last_tracked_gray && since_s <= o.local_max_s &&
+    const double since_s = m.sinceTrackedS(t_ns);
+    if (!m.database && m.localSearchInReach(t_ns) && m.untracked >= o.local_after_untracked_frames &&
         gray.width >= kThumbnailWidth && gray.height >= kThumbnailHeight && m.last_tracked_gray->scene_depth_m > 0 &&
         (!prediction || !prediction->inertial ||
          3.0 * out.inertial_sigma_m > o.local_offset_fraction * m.last_tracked_gray->scene_depth_m)) {
