@@ -205,6 +205,13 @@ struct TrackedImage {
   double scene_depth_m = 0;  ///< Median depth of the keyframe it was tracked against, metres.
 };
 
+/// A pose the local search renders its keyframes around (RelocalizationOptions::local_headings).
+struct SearchAnchor {
+  Pose T_world_camera = Pose::Identity();
+  int64_t t_ns = 0;
+  double scene_depth_m = 0;  ///< Median depth of its keyframe, metres.
+};
+
 }  // namespace
 
 Result<LocalizerBackend> parseLocalizerBackend(const std::string& name) {
@@ -253,6 +260,11 @@ struct Localizer::Impl {
   bool tracked_since_reset = false;  ///< A frame was tracked since create/reset.
   /// The last frame whose pose was tracked and accepted: its image, pose and time.
   std::optional<TrackedImage> last_tracked_gray;
+  /// Until a pose is taken after create/reset: the pose given to start at, at the first frame
+  /// (its time, its keyframe's depth). The local search renders around it when the start's
+  /// frames do not verify (a start pose decimetres off in a room).
+  std::optional<SearchAnchor> start_anchor;
+  std::optional<int64_t> first_t_ns;  ///< The first frame's time since create/reset (forgetTrack).
   /// Consecutive poses the motion prior refused that count against it (refusalCountsAgainstPrior),
   /// the last one's time.
   struct Refusals {
@@ -425,21 +437,30 @@ struct Localizer::Impl {
     return prior;
   }
 
-  /// The verification score a pose needs: tracking's, or while the motion prior's velocity is
-  /// unobserved (the pose taken sets it) at least motion_search_confident_score.
-  /// Seconds from the last tracked frame to t_ns (0 when none).
+  /// The pose the local search renders around: the last tracked one, else the start's.
+  std::optional<SearchAnchor> searchAnchor() const {
+    if (last_tracked_gray) {
+      return SearchAnchor{last_tracked_gray->T_world_camera, last_tracked_gray->t_ns, last_tracked_gray->scene_depth_m};
+    }
+    return start_anchor;
+  }
+
+  /// Seconds from the last tracked frame (before one: the start's first frame) to t_ns (0 when none).
   double sinceTrackedS(int64_t t_ns) const {
-    return last_tracked_t_ns ? static_cast<double>(t_ns - *last_tracked_t_ns) * 1e-9 : 0.0;
+    if (last_tracked_t_ns) return static_cast<double>(t_ns - *last_tracked_t_ns) * 1e-9;
+    return start_anchor ? static_cast<double>(t_ns - start_anchor->t_ns) * 1e-9 : 0.0;
   }
 
   /// Whether the local search (RelocalizationOptions::local_headings) may run at t_ns: it is on,
   /// and a tracked pose to search around lies within local_max_s.
   bool localSearchInReach(int64_t t_ns) const {
     const RelocalizationOptions& o = options.relocalization;
-    return o.local_headings > 0 && !o.local_tilts_deg.empty() && last_tracked_gray &&
+    return o.local_headings > 0 && !o.local_tilts_deg.empty() && (last_tracked_gray || start_anchor) &&
            sinceTrackedS(t_ns) <= o.local_max_s;
   }
 
+  /// The verification score a pose needs: tracking's, or while the motion prior's velocity is
+  /// unobserved (the pose taken sets it) at least motion_search_confident_score.
   double minTakenScore(bool velocity_unobserved) const {
     return velocity_unobserved ? std::max(options.verification.min_score, options.motion_search_confident_score)
                                : options.verification.min_score;
@@ -1206,6 +1227,8 @@ struct Localizer::Impl {
   void forgetTrack() {
     tracked_since_reset = false;
     last_tracked_gray.reset();
+    start_anchor.reset();
+    first_t_ns.reset();
     refusals = {};
     refused_stretch = {};
     untracked = 0;
@@ -1622,6 +1645,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   }
   ++m.frame_index;
   if (m.last_t_ns) m.frame_interval_ns = t_ns - *m.last_t_ns;
+  if (!m.first_t_ns) m.first_t_ns = t_ns;
   if (m.worker()) {
     // Frames a second or more apart (a paused stream), and a frame that waited for a keyframe
     // (a start, a loss), say nothing of the next frame's wait.
@@ -1765,6 +1789,9 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   m.rotation_prior.reset();
   m.last_t_ns = t_ns;
   const Keyframe& keyframe = *m.keyframes->current();
+  if (!m.tracked_since_reset && !m.start_anchor) {
+    m.start_anchor = SearchAnchor{guess, m.first_t_ns.value_or(t_ns), keyframe.scene_depth_m};
+  }
   out.quality = track.quality;
   out.state = track.state;
   out.T_world_camera = track.T_world_camera;
@@ -1787,7 +1814,9 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // 5 Hz, after 7 frames lost, the room's frame 12 tracked 4.4 m and 173 deg off at 0.21), while
   // a search can find it instead (a database, or the local search's time since the last tracked
   // frame): with none, imagery whose true poses verify below the confident score would never be
-  // tracked again. A caller's guess is not the carried motion.
+  // tracked again. A caller's guess is not the carried motion. Before a first pose is taken the
+  // guess is the start pose held while the camera moves on, as blind (the room started 0.87 m
+  // off: frames after lost ones tracked 3.7 m off at 0.23-0.27).
   const bool can_search = m.database || m.localSearchInReach(t_ns);
   const bool blind_guess = prediction && !prediction->inertial &&
                            ((previous_t_ns && m.last_relocalized_t_ns == previous_t_ns) ||
@@ -1795,8 +1824,31 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // Without an IMU (no reading since the start) nothing else checks a pose: it is taken only when
   // verified too, database or not (taken, a pose metres off was reported as tracked and tracked on: the
   // room without its IMU, after its 190 deg/s turn at frame 86, 2-3 m off at scores 0-0.12).
-  if ((m.database || !m.last_imu) && track.state == TrackingState::kTracking &&
-      out.verify_score < m.minTakenScore(blind_guess)) {
+  // Nor does anything before the first pose is taken, IMU or not: the filter's gate then holds
+  // only the start pose and an unknown velocity (the room started 0.87 m off: its second frame
+  // tracked 2.25 m off at 0.02, and the filter bridged from it to 10 m off in 2 s). Except on the
+  // start's own frame, ending within local_offset_fraction x the depth of the start pose: the
+  // start pose vouches for it (imagery whose true poses verify below tracking's score: the
+  // fisheye's central crop over the hard city started at its true pose at 0.04, and refused
+  // there, lost 17 frames). A pose taken at the start must also lie where the local search would
+  // take one, within local_depth_fraction x the start keyframe's depth + growth_m_s x the seconds
+  // since the first frame of the start pose: a look-alike verifies well (the room started 0.87 m
+  // off: tracked 2.45 m off at 0.87). A caller's guess for the frame replaces the start pose.
+  const bool starting = !m.tracked_since_reset;
+  bool far_from_start = false, start_vouches = false;
+  if (starting && !T_world_camera_guess && m.start_anchor && m.start_anchor->scene_depth_m > 0 &&
+      track.state == TrackingState::kTracking) {
+    const RelocalizationOptions& o = m.options.relocalization;
+    const double from_start_m =
+        (track.T_world_camera.translation() - m.start_anchor->T_world_camera.translation()).norm();
+    far_from_start =
+        from_start_m > o.local_depth_fraction * m.start_anchor->scene_depth_m + o.growth_m_s * m.sinceTrackedS(t_ns);
+    start_vouches =
+        t_ns == m.start_anchor->t_ns && from_start_m <= o.local_offset_fraction * m.start_anchor->scene_depth_m;
+  }
+  if (((m.database || !m.last_imu || (starting && !start_vouches)) && track.state == TrackingState::kTracking &&
+       out.verify_score < m.minTakenScore(blind_guess)) ||
+      far_from_start) {
     track.state = TrackingState::kLost;
     out.state = TrackingState::kLost;
   }
@@ -1947,21 +1999,22 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     ++m.untracked;
     const RelocalizationOptions& o = m.options.relocalization;
     const double since_s = m.sinceTrackedS(t_ns);
+    const std::optional<SearchAnchor> anchor = m.searchAnchor();
     if (!m.database && m.localSearchInReach(t_ns) && m.untracked >= o.local_after_untracked_frames &&
-        gray.width >= kThumbnailWidth && gray.height >= kThumbnailHeight && m.last_tracked_gray->scene_depth_m > 0 &&
-        (!prediction || !prediction->inertial ||
-         3.0 * out.inertial_sigma_m > o.local_offset_fraction * m.last_tracked_gray->scene_depth_m)) {
-      // Without a database: keyframes rendered around the last tracked pose on the first frame
-      // with something to recognise (the depth: the last tracked frame's keyframe's). With the
-      // IMU only once its prediction may lie outside the alignment's basin (3 sigma beyond
-      // local_offset_fraction of the depth): bridged frames a few millimetres uncertain need no
-      // search (the room's frame 92, relocalized 12.6 mm off at a score of 0.27, was bridged
-      // 1.9 mm off).
-      const double depth_m = m.last_tracked_gray->scene_depth_m;
+        gray.width >= kThumbnailWidth && gray.height >= kThumbnailHeight && anchor->scene_depth_m > 0 &&
+        (!prediction || !prediction->inertial || !m.tracked_since_reset ||
+         3.0 * out.inertial_sigma_m > o.local_offset_fraction * anchor->scene_depth_m)) {
+      // Without a database: keyframes rendered around the last tracked pose (before the first
+      // one: the start pose) on the first frame with something to recognise (the depth: the last
+      // tracked frame's keyframe's). With the IMU only once its prediction may lie outside the
+      // alignment's basin (3 sigma beyond local_offset_fraction of the depth): bridged frames a
+      // few millimetres uncertain need no search (the room's frame 92, relocalized 12.6 mm off at
+      // a score of 0.27, was bridged 1.9 mm off); at the start at once (no pose has verified).
+      const double depth_m = anchor->scene_depth_m;
       Result<ImageU8> thumbnail = descriptorThumbnail(gray);
       if (!thumbnail.ok()) return thumbnail.error();
       if (thumbnailContrast(*thumbnail) >= o.min_contrast) {
-        const Pose& T_last = m.last_tracked_gray->T_world_camera;
+        const Pose& T_last = anchor->T_world_camera;
         // Made again after a tracked frame, and when the prediction has moved on by more than
         // local_offset_fraction of the depth from the one it was made at.
         if (!m.local_database || !m.local_database_pose || m.local_database_pose->matrix() != T_last.matrix() ||
