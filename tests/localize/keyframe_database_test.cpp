@@ -533,6 +533,15 @@ TEST(Relocalization, WithoutTheImuTheFrameAfterARelocalizedOneIsTakenOnlyWhenCon
   }
 }
 
+/// T_world_camera turned about the camera's vertical axis by yaw_deg, then its horizontal one by
+/// tilt_deg (degrees), at the same position.
+Pose turnedView(Pose T_world_camera, double yaw_deg, double tilt_deg = 0.0) {
+  T_world_camera.linear() = T_world_camera.linear() *
+                            Eigen::AngleAxisd(yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                            Eigen::AngleAxisd(tilt_deg * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  return T_world_camera;
+}
+
 /// A Localizer of the asymmetric scene with no database, keyframes made synchronously, at
 /// localizeTruth(0).
 std::unique_ptr<Localizer> plainLocalizer(LocalizerOptions options) {
@@ -582,10 +591,7 @@ TEST(Relocalization, WithoutADatabaseKeyframesRenderedAroundTheLastPoseFindAFast
   // The turned frame is found by the search over keyframes rendered around the last tracked pose
   // (RelocalizationOptions::local_headings); the control, with none, loses it.
   constexpr double kTurnDeg = 40.0, kTiltDeg = 8.0;
-  Pose turned = test::localizeTruth(3);
-  turned.linear() = turned.linear() *
-                    Eigen::AngleAxisd(kTurnDeg * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix() *
-                    Eigen::AngleAxisd(kTiltDeg * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Pose turned = turnedView(test::localizeTruth(3), kTurnDeg, kTiltDeg);
   auto view = renderReference(test::makeAsymmetricScene(), test::localizeCamera(), turned);
   ASSERT_TRUE(view.ok()) << view.error().message;
   for (const bool local : {true, false}) {
@@ -630,9 +636,7 @@ TEST(Relocalization, WithoutTheImuALocalSearchsPoseGoesOnAtTheVelocitySinceTheLa
   // between them, is the camera's velocity: the black frame after it reports the prediction, the
   // found pose moved on by that velocity over 50 ms. (Before, a found pose restarted the motion
   // at rest, and a camera walking on was searched for where it had been found.)
-  Pose turned = test::localizeTruth(3);
-  turned.linear() =
-      turned.linear() * Eigen::AngleAxisd(40.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Pose turned = turnedView(test::localizeTruth(3), 40.0);
   auto view = renderReference(test::makeAsymmetricScene(), test::localizeCamera(), turned);
   ASSERT_TRUE(view.ok()) << view.error().message;
   auto created = plainLocalizer(LocalizerOptions{});
@@ -760,9 +764,7 @@ TEST(Relocalization, WithoutADatabaseAStartPoseThatDoesNotTrackIsSearchedAround)
   // it. The alignment from the start pose cannot reach the view; keyframes rendered around the
   // start pose find it (the local search, before any pose was tracked). The control, with no
   // local search, does not.
-  Pose turned = test::localizeTruth(0);
-  turned.linear() =
-      turned.linear() * Eigen::AngleAxisd(40.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Pose turned = turnedView(test::localizeTruth(0), 40.0);
   auto view = renderReference(test::makeAsymmetricScene(), test::localizeCamera(), turned);
   ASSERT_TRUE(view.ok()) << view.error().message;
   for (const bool search : {true, false}) {
