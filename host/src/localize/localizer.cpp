@@ -452,7 +452,7 @@ struct Localizer::Impl {
   }
 
   /// Whether the local search (RelocalizationOptions::local_headings) may run at t_ns: it is on,
-  /// and a tracked pose to search around lies within local_max_s.
+  /// and a pose to search around (searchAnchor) lies within local_max_s.
   bool localSearchInReach(int64_t t_ns) const {
     const RelocalizationOptions& o = options.relocalization;
     return o.local_headings > 0 && !o.local_tilts_deg.empty() && (last_tracked_gray || start_anchor) &&
@@ -1830,21 +1830,26 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // start's own frame, ending within local_offset_fraction x the depth of the start pose: the
   // start pose vouches for it (imagery whose true poses verify below tracking's score: the
   // fisheye's central crop over the hard city started at its true pose at 0.04, and refused
-  // there, lost 17 frames). A pose taken at the start must also lie where the local search would
-  // take one, within local_depth_fraction x the start keyframe's depth + growth_m_s x the seconds
-  // since the first frame of the start pose: a look-alike verifies well (the room started 0.87 m
-  // off: tracked 2.45 m off at 0.87). A caller's guess for the frame replaces the start pose.
+  // there, lost 17 frames); a caller's guess for that frame vouches as the start pose does. A
+  // pose taken at the start must also lie where the local search would take one, within
+  // local_depth_fraction x the start keyframe's depth + growth_m_s x the seconds since the first
+  // frame of the path from the start pose to the prediction: a look-alike verifies well (the room
+  // started 0.87 m off: tracked 2.45 m off at 0.87). Not against a caller's guess.
   const bool starting = !m.tracked_since_reset;
   bool far_from_start = false, start_vouches = false;
-  if (starting && !T_world_camera_guess && m.start_anchor && m.start_anchor->scene_depth_m > 0 &&
-      track.state == TrackingState::kTracking) {
+  if (starting && m.start_anchor && m.start_anchor->scene_depth_m > 0 && track.state == TrackingState::kTracking) {
     const RelocalizationOptions& o = m.options.relocalization;
-    const double from_start_m =
-        (track.T_world_camera.translation() - m.start_anchor->T_world_camera.translation()).norm();
-    far_from_start =
-        from_start_m > o.local_depth_fraction * m.start_anchor->scene_depth_m + o.growth_m_s * m.sinceTrackedS(t_ns);
+    const Pose& T_start = T_world_camera_guess ? *T_world_camera_guess : m.start_anchor->T_world_camera;
     start_vouches =
-        t_ns == m.start_anchor->t_ns && from_start_m <= o.local_offset_fraction * m.start_anchor->scene_depth_m;
+        t_ns == m.start_anchor->t_ns && (track.T_world_camera.translation() - T_start.translation()).norm() <=
+                                            o.local_offset_fraction * m.start_anchor->scene_depth_m;
+    if (!T_world_camera_guess) {
+      Impl::LocalBound bound;
+      bound.a = m.start_anchor->T_world_camera.translation();
+      bound.b = guess.translation().allFinite() ? guess.translation() : bound.a;
+      bound.radius_m = o.local_depth_fraction * m.start_anchor->scene_depth_m + o.growth_m_s * m.sinceTrackedS(t_ns);
+      far_from_start = !bound.holds(track.T_world_camera.translation());
+    }
   }
   if (((m.database || !m.last_imu || (starting && !start_vouches)) && track.state == TrackingState::kTracking &&
        out.verify_score < m.minTakenScore(blind_guess)) ||
@@ -1988,8 +1993,9 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
 
   // 5b. Relocalization: with a keyframe database, a frame not tracked after
   // after_untracked_frames in a row is searched for around the prediction, in a region that
-  // grows with the time since the last tracked frame, the prediction's uncertainty and every
-  // search that found nothing; without one, among keyframes rendered around the last tracked pose
+  // grows with the time since the last tracked frame (before one: since the first frame), the
+  // prediction's uncertainty and every search that found nothing; without one, among keyframes
+  // rendered around the last tracked pose, before one around the start pose
   // (local_after_untracked_frames).
   if (out.state == TrackingState::kTracking) {
     m.untracked = 0;

@@ -175,8 +175,10 @@ struct RelocalizationOptions {
   /// last tracked frame's) + growth_m_s x the seconds since the last tracked frame of the path
   /// from the last tracked position to the prediction's. With the IMU, only once the
   /// prediction's 3 sigma exceeds local_offset_fraction x that depth. Before a first pose is
-  /// taken, the start pose (Localizer::reset) stands for the last tracked one, its first frame's
-  /// time and keyframe depth for theirs, and a tracked pose too must lie within that bound of it.
+  /// taken, the start pose (the first aligned frame's guess: Localizer::reset's pose, or the
+  /// prediction from it after empty frames) stands for the last tracked one, the first frame's
+  /// time and that keyframe's depth for theirs, and a tracked pose too must lie within that bound
+  /// (not against a caller's guess).
   /// 0 headings: no search without a database.
   int local_headings = 12;
   std::vector<double> local_tilts_deg{-25.0, 0.0, 25.0};
@@ -389,7 +391,8 @@ struct LocalizationResult {
   /// above LocalizerOptions::verification.min_score the pose is the true one with the measured
   /// rates of `vkloc bench verify`. A pose scoring below it is not taken (state kLost or
   /// kInertial) with a keyframe database, without the IMU, and before a first pose is taken since
-  /// create/reset (but on the first frame near the start pose); otherwise the IMU's gate decides.
+  /// create/reset (but on the first frame near the start pose or the caller's guess); otherwise
+  /// the IMU's gate decides.
   double verify_score = 0;
   /// kTracking: the visual alignment is trusted; kInertial: it was lost or disagreed with the
   /// IMU, T_world_camera is the inertial prediction (InertialAiding); kLost: no trusted pose.
