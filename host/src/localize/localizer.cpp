@@ -832,6 +832,17 @@ struct Localizer::Impl {
     }
   };
 
+  /// Where the local search takes a pose at t_ns: within local_depth_fraction x the anchor's depth
+  /// + growth_m_s x the seconds since it (sinceTrackedS) of the path from the anchor to `guess`.
+  LocalBound localBound(const SearchAnchor& anchor, const Pose& guess, int64_t t_ns) const {
+    const RelocalizationOptions& o = options.relocalization;
+    LocalBound bound;
+    bound.a = anchor.T_world_camera.translation();
+    bound.b = guess.translation().allFinite() ? guess.translation() : bound.a;
+    bound.radius_m = o.local_depth_fraction * anchor.scene_depth_m + o.growth_m_s * sinceTrackedS(t_ns);
+    return bound;
+  }
+
   /// Relocalization search (RelocalizationOptions) of this frame in `region` (nullopt: the whole
   /// database) of `db`: the attached database (a pose taken inside its box), or with `local` the
   /// keyframes rendered around the last tracked pose (no grid reach; a pose taken only within the
@@ -1844,11 +1855,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
         t_ns == m.start_anchor->t_ns && (track.T_world_camera.translation() - T_start.translation()).norm() <=
                                             o.local_offset_fraction * m.start_anchor->scene_depth_m;
     if (!T_world_camera_guess) {
-      Impl::LocalBound bound;
-      bound.a = m.start_anchor->T_world_camera.translation();
-      bound.b = guess.translation().allFinite() ? guess.translation() : bound.a;
-      bound.radius_m = o.local_depth_fraction * m.start_anchor->scene_depth_m + o.growth_m_s * m.sinceTrackedS(t_ns);
-      far_from_start = !bound.holds(track.T_world_camera.translation());
+      far_from_start = !m.localBound(*m.start_anchor, guess, t_ns).holds(track.T_world_camera.translation());
     }
   }
   if (((m.database || !m.last_imu || (starting && !start_vouches)) && track.state == TrackingState::kTracking &&
@@ -2038,10 +2045,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
         // prediction: a look-alike place elsewhere verifies as well (the room without its IMU:
         // 4.9 m off at 0.92, 0.65 s after its last tracked frame; at 10 Hz 2.06 m off at 1.0,
         // 0.1 s after it, under a bound of 2 m + 2 m/s).
-        Impl::LocalBound bound;
-        bound.a = T_last.translation();
-        bound.b = guess.translation().allFinite() ? guess.translation() : bound.a;
-        bound.radius_m = o.local_depth_fraction * depth_m + o.growth_m_s * since_s;
+        const Impl::LocalBound bound = m.localBound(*anchor, guess, t_ns);
         TrackResult found;
         Result<bool> searched =
             m.relocalize(*m.local_database, bound, gray, t_ns, std::nullopt, found, out, &m.local_views);
