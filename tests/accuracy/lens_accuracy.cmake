@@ -13,6 +13,13 @@
 #                 Both views lose no frame and keep the median error within 0.5 % of the scene
 #                 depth (a restart at rest, before the restart kept the filter's velocity, left
 #                 the stabilised view 44 frames lost and the crop 45 m off over 183 frames).
+#   fisheye_acro   the same lens on the acrobatic drone (twice the agile one's swings, up to 43 deg
+#                 and 4.4 rad/s), seed 7, 100 frames: the crop's first alignments barely move
+#                 while the drone flies 6.7 m/s, the filter takes that velocity and refuses every
+#                 pose after; it restarts at a verified pose (not at one scoring 0.03 after poses
+#                 verified at 0.47) at an unknown velocity (the velocity it kept was the wrong
+#                 thing). Both views lose no frame and keep the median error within 0.5 % of the
+#                 scene depth (the crop was 21 m off at the median before, bridged 300 m off).
 #   radtan_mild, radtan_euroc   the room (easy, 300 frames) and the same images through a
 #                 radial-tangential lens (vkloc distort; mild: k1 -0.1 k2 0.01; euroc: EuRoC's
 #                 k1 -0.28 k2 0.074), tracked through the undistorted view: no frame lost and
@@ -63,11 +70,16 @@ if(CASE STREQUAL "fisheye_eis")
     check(eis "${eis_translation_median_m} <= 1.1 * ${crop_translation_median_m}"
           "median ${eis_translation_median_m} m > 1.1 x the crop's ${crop_translation_median_m} m")
   endif()
-elseif(CASE STREQUAL "fisheye_city_edge")
-  set(seq ${WORK}/city_hard_agile_fisheye_seed4)
+elseif(CASE MATCHES "^fisheye_(city_edge|acro)$")
+  if(CASE STREQUAL "fisheye_city_edge")
+    set(seq ${WORK}/city_hard_agile_fisheye_seed4)
+    set(simulation --trajectory drone_agile --frames 300 --seed 4)
+  else()
+    set(seq ${WORK}/city_hard_acro_fisheye_seed7)
+    set(simulation --trajectory drone_acro --frames 100 --seed 7)
+  endif()
   if(NOT EXISTS ${seq}/images.txt)
-    run("simulate" ${VKLOC} simulate city hard --lens fisheye --trajectory drone_agile --frames 300 --seed 4
-        --out ${seq})
+    run("simulate" ${VKLOC} simulate city hard --lens fisheye ${simulation} --out ${seq})
   endif()
   set(view --view-size 480x360 --view-hfov 90 --view-pitch 45)
   track_case(eis ${seq} --view stabilised ${view})

@@ -170,12 +170,14 @@ struct WrongVelocityRun {
   int refused = 0;
 };
 
-WrongVelocityRun runFromAWrongVelocity(const std::function<void(LocalizerOptions&)>& edit) {
+// Started at the first frame's true pose moving at speed_m_s along the camera's x axis (the
+// camera circles at a few centimetres per second).
+WrongVelocityRun runFromAWrongVelocity(const std::function<void(LocalizerOptions&)>& edit, double speed_m_s = 1.0) {
   WrongVelocityRun out;
   auto localizer = makeEkfLocalizer(edit);
   if (!localizer) return out;
   const Pose T0 = test::localizeTruth(0);
-  localizer->reset(T0, Eigen::Vector3d(T0.linear() * Eigen::Vector3d(1.0, 0, 0)));
+  localizer->reset(T0, Eigen::Vector3d(T0.linear() * Eigen::Vector3d(speed_m_s, 0, 0)));
   out.results = run(*localizer, 12, 0, true);
   for (size_t i = 0; i < out.results.size(); ++i) {
     out.refused += out.results[i].visual_rejected;
@@ -218,6 +220,30 @@ TEST(Localizer, ARestartedFilterPredictsFromTheImuAtOnceAndKeepsItsVelocityLoose
   // depths per second.
   EXPECT_LT(next_sigma_m[1], 0.1);
   EXPECT_GT(next_sigma_m[0], 2.0 * next_sigma_m[1]) << next_sigma_m[0];
+}
+
+// A restart keeps the filter's velocity with restart_sigma_velocity_m_s as its sigma; where that
+// velocity is itself wrong (2 m/s with a sigma of 0.2 here) the next true pose is refused too:
+// the prior then restarts at that pose at an unknown velocity, and every frame after is tracked.
+// (Before, it restarted with the same velocity every other frame, the frames between bridged 8 cm
+// off.)
+TEST(Localizer, ARestartWhoseVelocityTheNextPoseRefusesRestartsAtAnUnknownVelocity) {
+  const WrongVelocityRun r =
+      runFromAWrongVelocity([](LocalizerOptions& o) { o.restart_sigma_velocity_m_s = 0.2; }, 2.0);
+  ASSERT_EQ(r.results.size(), 12u);
+  ASSERT_TRUE(r.restarted_at.has_value());
+  const size_t first = static_cast<size_t>(*r.restarted_at);
+  ASSERT_LT(first + 2, r.results.size());
+  EXPECT_TRUE(r.results[first + 1].prior_restarted);  // refused by the velocity kept: restarted again
+  int restarts = 0;
+  for (size_t i = first; i < r.results.size(); ++i) {
+    const LocalizationResult& f = r.results[i];
+    restarts += f.prior_restarted;
+    EXPECT_EQ(f.state, TrackingState::kTracking) << i;
+    EXPECT_FALSE(f.visual_rejected) << i;
+    EXPECT_LT(test::translationError(f.T_world_camera, test::localizeTruth(static_cast<int>(i))), 3e-3) << i;
+  }
+  EXPECT_EQ(restarts, 2);
 }
 
 // The same wrong-velocity start with the score rule off: a filter that refuses every tracked pose

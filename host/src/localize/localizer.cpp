@@ -280,7 +280,11 @@ struct Localizer::Impl {
   struct RefusedStretch {
     std::optional<int64_t> first_t_ns;
     int64_t last_t_ns = 0;
+    bool verified = false;  ///< One of them verified (VerificationOptions::min_score).
   } refused_stretch;
+  /// The time of a restart of the motion prior that kept the filter's velocity, until a pose is
+  /// taken after it.
+  std::optional<int64_t> restart_kept_velocity_t_ns;
   /// Records the verification score of a pose the motion prior took.
   void poseTaken(double score) {
     std::vector<double>& s = refusals.taken_scores;
@@ -1211,6 +1215,7 @@ struct Localizer::Impl {
     tracked_since_reset = true;
     refusals = {};
     refused_stretch = {};
+    restart_kept_velocity_t_ns.reset();
     untracked = 0;
     failed_searches = 0;
     last_tracked_t_ns = t_ns;
@@ -1242,6 +1247,7 @@ struct Localizer::Impl {
     first_t_ns.reset();
     refusals = {};
     refused_stretch = {};
+    restart_kept_velocity_t_ns.reset();
     untracked = 0;
     failed_searches = 0;
     last_tracked_t_ns.reset();
@@ -1901,20 +1907,36 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     Impl::RefusedStretch& s = m.refused_stretch;
     if (!s.first_t_ns || t_ns <= s.last_t_ns ||
         static_cast<double>(t_ns - s.last_t_ns) * 1e-9 > m.options.motion_search_max_gap_s) {
+      s = {};
       s.first_t_ns = t_ns;
     }
     s.last_t_ns = t_ns;
+    // Where the stretch has verified poses, the restart waits for one: on imagery whose true poses
+    // verify, an unverified one is as likely a look-alike as the truth (a fast drone's filter
+    // refused poses verified at 0.47 and restarted at one of 0.03, then bridged 300 m off).
+    const bool verified = out.verify_score >= m.options.verification.min_score;
+    s.verified = s.verified || verified;
     refused_too_long = m.options.restart_after_refused_s > 0 &&
-                       static_cast<double>(t_ns - *s.first_t_ns) * 1e-9 >= m.options.restart_after_refused_s;
+                       static_cast<double>(t_ns - *s.first_t_ns) * 1e-9 >= m.options.restart_after_refused_s &&
+                       (verified || !s.verified);
   } else if (track.state == TrackingState::kTracking) {
     m.refused_stretch = {};
   }
-  if (restart || refused_too_long) {
+  // A prior restarted with its velocity that refuses the next verified pose has the velocity
+  // wrong (a fast drone's start whose first alignments barely moved: 1 m/s for 6.7, every pose
+  // after refused): it restarts at that pose at an unknown velocity, as at a start.
+  const bool velocity_refused =
+      out.visual_rejected && m.restart_kept_velocity_t_ns && t_ns > *m.restart_kept_velocity_t_ns &&
+      static_cast<double>(t_ns - *m.restart_kept_velocity_t_ns) * 1e-9 <= m.options.motion_search_max_gap_s &&
+      out.verify_score >= m.options.verification.min_score;
+  m.restart_kept_velocity_t_ns.reset();
+  if (restart || refused_too_long || velocity_refused) {
     // The prior keeps its velocity, loosened (restart_sigma_velocity_m_s).
     std::optional<Eigen::Vector3d> v_world;
     if (m.options.restart_sigma_velocity_m_s > 0 && prediction && prediction->inertial &&
-        !prediction->velocity_unobserved && prediction->v_world_body) {
+        !prediction->velocity_unobserved && prediction->v_world_body && !velocity_refused) {
       v_world = prediction->v_world_body;
+      m.restart_kept_velocity_t_ns = t_ns;
     }
     m.restartPrior(track.T_world_camera, v_world, t_ns,
                    std::max(m.options.restart_sigma_velocity_m_s, v_world ? prediction->sigma_velocity_m_s : 0.0));

@@ -334,10 +334,12 @@ struct LocalizerOptions {
   /// Restart of the motion prior whatever the scores: after the prior's gate has refused every
   /// tracked pose for this long (seconds; poses at most motion_search_max_gap_s apart; a pose
   /// refused only because a restarted prior takes verified poses alone does not count), it
-  /// restarts at the last one (prior_restarted). A prior that refuses alignments frame after
-  /// frame for that long has drifted (a wrong velocity or tilt taken from biased poses, with a
-  /// covariance too small to admit it) more often than the alignments are all wrong, and an
-  /// inertial stretch goes on drifting until max_inertial_s ends it anyway. 0 = never.
+  /// restarts at the last one (prior_restarted); where one of the stretch's poses verified
+  /// (verification.min_score), at the first verified one from then on. A prior that refuses
+  /// alignments frame after frame for that long has drifted (a wrong velocity or tilt taken from
+  /// biased poses, with a covariance too small to admit it) more often than the alignments are
+  /// all wrong, and an inertial stretch goes on drifting until max_inertial_s ends it anyway.
+  /// 0 = never.
   double restart_after_refused_s = 0.3;
   /// 1-sigma (m/s, at least the filter's own) of the velocity a restarted prior keeps: the
   /// filter's velocity at that frame, when it has an observed one (kEkf), else an unknown
@@ -345,7 +347,8 @@ struct LocalizerOptions {
   /// integrated from the accelerometer, may be off by what the refusals say but not by the
   /// camera's speed, which is what a start at rest is off by (a drone restarted so drifts off at
   /// its speed, and the only poses a restarted prior takes, verified ones, may not come where
-  /// the refusals came from). 0 = an unknown velocity.
+  /// the refusals came from). A restarted prior that refuses the next verified pose had the
+  /// velocity wrong: it restarts at that pose at an unknown velocity. 0 = an unknown velocity.
   double restart_sigma_velocity_m_s = 1.0;
   /// Align each frame the filter predicts from the IMU with the filter's attitude as a prior
   /// (EdgeTrackerOptions::rotation_prior: the prediction's attitude and its rotation covariance,
