@@ -265,6 +265,13 @@ struct Localizer::Impl {
   /// frames do not verify (a start pose decimetres off in a room).
   std::optional<SearchAnchor> start_anchor;
   std::optional<int64_t> first_t_ns;  ///< The first frame's time since create/reset (forgetTrack).
+  /// A first pose taken after lost frames without a database, with the IMU, waiting for the next
+  /// frame to confirm it (RelocalizationOptions::confirm_start): the start as it was before it.
+  struct StartOnProbation {
+    SearchAnchor anchor;
+    int64_t first_t_ns = 0;
+  };
+  std::optional<StartOnProbation> start_probation;
   /// Consecutive poses the motion prior refused that count against it (refusalCountsAgainstPrior),
   /// the last one's time.
   struct Refusals {
@@ -1245,6 +1252,7 @@ struct Localizer::Impl {
     last_tracked_gray.reset();
     start_anchor.reset();
     first_t_ns.reset();
+    start_probation.reset();
     refusals = {};
     refused_stretch = {};
     restart_kept_velocity_t_ns.reset();
@@ -1676,7 +1684,10 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
 
   // 0. A frame with nothing to align (black, saturated, uniform): reported at once; the motion
   // prior bridges it (the IMU keeps running), and no alignment, search or relocalization runs.
-  if (T_world_camera_guess) m.searching = m.confirming = false;
+  if (T_world_camera_guess) {
+    m.searching = m.confirming = false;
+    m.start_probation.reset();  // the caller's pose vouches
+  }
   double image_contrast = 0;
   if (m.options.image_content.min_contrast > 0) {
     Result<ImageContentCheck> content = checkImageContent(gray, m.options.image_content);
@@ -2020,6 +2031,32 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     }
   }
 
+  // 5a'. The same for a first pose taken after lost frames without a database (a search around
+  // the start pose, or a plain alignment from the start pose held while the camera moved on):
+  // this frame, tracked from it, taken and verified, confirms it; otherwise the track goes back
+  // to the start (its pose, its first frame's time: the local search's bound) with the filter
+  // restarted there at an unknown velocity, and this frame counts as lost (searched below). The
+  // room started 0.87 m off took look-alikes 2.5-5 m off at 0.67-0.91 seconds later, each
+  // followed by frames verified at 0-0.06.
+  bool start_dropped = false;
+  if (m.start_probation) {
+    const Impl::StartOnProbation probation = *m.start_probation;
+    m.start_probation.reset();
+    if (out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted &&
+        out.verify_score >= m.options.verification.min_score) {
+      confirmed = true;  // reported kRelocalized below
+    } else {
+      m.forgetTrack();
+      m.start_anchor = probation.anchor;
+      m.first_t_ns = probation.first_t_ns;
+      m.restartPrior(probation.anchor.T_world_camera, std::nullopt, t_ns);
+      m.keyframes->frameNotTracked();    // the next frame aligns against a keyframe made at its guess
+      out.state = TrackingState::kLost;  // not bridged from the pose dropped
+      out.pose_filtered = false;
+      start_dropped = true;
+    }
+  }
+
   // 5b. Relocalization: with a keyframe database, a frame not tracked after
   // after_untracked_frames in a row is searched for around the prediction, in a region that
   // grows with the time since the last tracked frame (before one: since the first frame), the
@@ -2097,6 +2134,14 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     }
   }
 
+  // A first pose after lost frames goes on probation (5a').
+  if ((starting || start_dropped) && m.tracked_since_reset && !m.database && m.last_imu && !T_world_camera_guess &&
+      m.options.relocalization.confirm_start && m.start_anchor && m.first_t_ns && t_ns != *m.first_t_ns &&
+      (out.state == TrackingState::kTracking || out.state == TrackingState::kRelocalized)) {
+    m.start_probation = Impl::StartOnProbation{*m.start_anchor, *m.first_t_ns};
+    out.state = TrackingState::kInitializing;
+    out.confirming = true;
+  }
   if (confirmed) out.state = TrackingState::kRelocalized;
 
   // 6. Worker mode: the next keyframe, at the pose the camera will have when it is ready.

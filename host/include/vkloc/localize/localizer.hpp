@@ -126,7 +126,10 @@ struct RelocalizationOptions {
   /// Only with the IMU (readings given since startSearch), whose propagation carries the pose to
   /// the next frame: without it that frame aligns from an unknown velocity, from the deepest
   /// level, and confirmed too few true poses (the room's STAR queries: 47 % recovered, not 83 %)
-  /// and too weakly (one wrong pose at a score of 0.18).
+  /// and too weakly (one wrong pose at a score of 0.18). The same holds, with the IMU and no
+  /// database, for a first pose after reset() taken after lost frames (a local search's around
+  /// the start pose, or an alignment from the start pose held while the camera moved on): not
+  /// confirmed, the track goes back to the start pose.
   bool confirm_start = true;
   /// Starts (of all candidates) aligned fully after the probes on the deepest level, most
   /// inliers above chance first (1..100).
