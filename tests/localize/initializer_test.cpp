@@ -60,6 +60,40 @@ TEST(Initializer, SearchesTheRotationGridAndKeepsTheBest) {
   EXPECT_NEAR(logSO3(r->T_world_camera.linear()).x(), 4.0 * M_PI / 180.0, 1e-9);
 }
 
+// A grid start replaces the first alignment in the same state only by min_inlier_gain: a first
+// alignment from the start pose at 0.548 was replaced by a grid start 2.29 m off at 0.554 (the
+// fisheye's crop over the hard city), and every frame after was lost.
+TEST(Initializer, AGridStartReplacesTheFirstAlignmentOnlyByAMargin) {
+  for (const double grid_inliers : {0.554, 0.62}) {
+    SCOPED_TRACE(grid_inliers);
+    Initializer init(InitializerOptions{});
+    InitializerSteps steps;
+    steps.align = [&](const Pose& start) -> Result<TrackResult> {
+      Pose far = start;
+      far.translation().x() = 2.29;
+      return result(TrackingState::kTracking, grid_inliers, far);
+    };
+    steps.rekey = [&](const Pose&) { return Status::success(); };
+    auto r = init.refine(Pose::Identity(), result(TrackingState::kTracking, 0.548), steps);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->state, TrackingState::kTracking);
+    if (grid_inliers < 0.548 + InitializerOptions{}.min_inlier_gain) {
+      EXPECT_NEAR(r->quality.inlier_ratio, 0.548, 1e-12);
+      EXPECT_EQ(r->T_world_camera.translation().x(), 0.0);
+    } else {
+      EXPECT_NEAR(r->quality.inlier_ratio, grid_inliers, 1e-12);
+    }
+  }
+  // A lost first alignment gives way to any tracking start.
+  Initializer init(InitializerOptions{});
+  InitializerSteps steps;
+  steps.align = [&](const Pose&) -> Result<TrackResult> { return result(TrackingState::kTracking, 0.3); };
+  steps.rekey = [&](const Pose&) { return Status::success(); };
+  auto r = init.refine(Pose::Identity(), result(TrackingState::kLost, 0.5), steps);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->state, TrackingState::kTracking);
+}
+
 TEST(Initializer, RefinesFromFreshKeyframesWhileLost) {
   InitializerOptions o;
   o.search_steps = 0;

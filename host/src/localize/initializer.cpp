@@ -1,6 +1,7 @@
 #include "vkloc/localize/initializer.hpp"
 
 #include <cmath>
+#include <optional>
 
 #include "vkloc/core/numeric.hpp"
 #include "vkloc/core/se3.hpp"
@@ -11,18 +12,19 @@ Status validateInitializerOptions(const InitializerOptions& o) {
     return makeError(ErrorCode::kInvalidArgument, "Localizer: init_refinements must be in 0..100");
   }
   if (o.search_steps < 0 || o.search_steps > 10 || !finiteIn(o.search_deg, 0.0, 90.0) ||
-      !finiteIn(o.confident_inlier_ratio, 0.0, 1.0)) {
+      !finiteIn(o.confident_inlier_ratio, 0.0, 1.0) || !finiteIn(o.min_inlier_gain, 0.0, 1.0)) {
     return makeError(ErrorCode::kInvalidArgument,
-                     "Localizer: need init_search_steps in 0..10, init_search_deg in 0..90 and "
-                     "init_confident_inlier_ratio in 0..1");
+                     "Localizer: need init_search_steps in 0..10, init_search_deg in 0..90, "
+                     "init_confident_inlier_ratio in 0..1 and init_min_inlier_gain in 0..1");
   }
   return Status::success();
 }
 
 Result<TrackResult> Initializer::refine(const Pose& guess, TrackResult track, const InitializerSteps& steps) const {
   // A result that is not clearly right: the alignment also starts from the guess turned about
-  // the camera's x and y axes on a grid (search_deg steps); the best result wins (tracking over
-  // lost, then the inlier ratio).
+  // the camera's x and y axes on a grid (search_deg steps); the best of those (tracking over
+  // lost, then the inlier ratio) replaces it when tracking where it is lost, or in the same state
+  // by min_inlier_gain.
   if (options_.search_steps > 0 &&
       !(track.state == TrackingState::kTracking && track.quality.inlier_ratio >= options_.confident_inlier_ratio)) {
     const int n = options_.search_steps;
@@ -33,6 +35,7 @@ Result<TrackResult> Initializer::refine(const Pose& guess, TrackResult track, co
       if (a_tracking != b_tracking) return a_tracking;
       return a.quality.inlier_ratio > b.quality.inlier_ratio;
     };
+    std::optional<TrackResult> best;
     for (int i = -n; i <= n; ++i) {
       for (int j = -n; j <= n; ++j) {
         if (i == 0 && j == 0) continue;
@@ -40,8 +43,13 @@ Result<TrackResult> Initializer::refine(const Pose& guess, TrackResult track, co
         start.linear() = guess.linear() * expSO3(Eigen::Vector3d(i * step_rad, j * step_rad, 0.0));
         Result<TrackResult> candidate = steps.align(start);
         if (!candidate.ok()) return candidate.error();
-        if (better(*candidate, track)) track = std::move(candidate).value();
+        if (!best || better(*candidate, *best)) best = std::move(candidate).value();
       }
+    }
+    if (best && ((best->state == TrackingState::kTracking) != (track.state == TrackingState::kTracking)
+                     ? best->state == TrackingState::kTracking
+                     : best->quality.inlier_ratio >= track.quality.inlier_ratio + options_.min_inlier_gain)) {
+      track = std::move(*best);
     }
   }
   // A guess far off converges in steps, each rendering a fresh keyframe at the last estimate.

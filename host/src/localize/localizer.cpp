@@ -25,6 +25,7 @@ InitializerOptions initializerOptions(const LocalizerOptions& o) {
   i.search_steps = o.init_search_steps;
   i.search_deg = o.init_search_deg;
   i.confident_inlier_ratio = o.init_confident_inlier_ratio;
+  i.min_inlier_gain = o.init_min_inlier_gain;
   return i;
 }
 
@@ -1300,7 +1301,7 @@ struct Localizer::Impl {
     applyBridge(motion->bridge(t_ns, prediction, guess), out);
     keyframes->frameNotTracked();  // the next frame aligns against a keyframe made at its guess
     ++untracked;
-    if (confirming) {  // the search's pose waits for a frame to confirm it
+    if (confirming || start_probation) {  // the search's (a first) pose waits for a frame to confirm it
       out.state = TrackingState::kInitializing;
       out.confirming = true;
     }
@@ -1940,7 +1941,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
       out.visual_rejected && m.restart_kept_velocity_t_ns && t_ns > *m.restart_kept_velocity_t_ns &&
       static_cast<double>(t_ns - *m.restart_kept_velocity_t_ns) * 1e-9 <= m.options.motion_search_max_gap_s &&
       out.verify_score >= m.options.verification.min_score;
-  m.restart_kept_velocity_t_ns.reset();
+  if (velocity_refused) m.restart_kept_velocity_t_ns.reset();
   if (restart || refused_too_long || velocity_refused) {
     // The prior keeps its velocity, loosened (restart_sigma_velocity_m_s).
     std::optional<Eigen::Vector3d> v_world;
@@ -1968,6 +1969,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   }
   if (track.state == TrackingState::kTracking && !out.visual_rejected) {
     if (!out.prior_restarted && prediction && prediction->inertial) m.refusals.restarted = false;
+    if (!out.prior_restarted) m.restart_kept_velocity_t_ns.reset();
     m.motion->setSceneDepth(keyframe.scene_depth_m);
     m.motion->addVisualPose(t_ns, Impl::filterPose(track), track.covariance);
     if (m.options.report_filtered_pose) {

@@ -235,6 +235,7 @@ struct LocalizerOptions {
   int init_search_steps = 1;
   double init_search_deg = 4.0;               ///< Grid step of the start-up search, degrees.
   double init_confident_inlier_ratio = 0.75;  ///< No start-up search at or above this inlier ratio.
+  double init_min_inlier_gain = 0.05;         ///< A grid start's gain over the first alignment to replace it.
   /// Learn which geometric edge kinds the live images show (KeyframeManagerOptions).
   bool adapt_edge_kinds = true;
   double kind_visibility_ratio = 0.7;  ///< See adapt_edge_kinds (0..1).
