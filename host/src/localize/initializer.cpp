@@ -46,9 +46,10 @@ Result<TrackResult> Initializer::refine(const Pose& guess, TrackResult track, co
         if (!best || better(*candidate, *best)) best = std::move(candidate).value();
       }
     }
-    if (best && ((best->state == TrackingState::kTracking) != (track.state == TrackingState::kTracking)
-                     ? best->state == TrackingState::kTracking
-                     : best->quality.inlier_ratio >= track.quality.inlier_ratio + options_.min_inlier_gain)) {
+    const bool tracking = track.state == TrackingState::kTracking;
+    if (best && (best->state == TrackingState::kTracking) != tracking) {
+      if (!tracking) track = std::move(*best);
+    } else if (best && best->quality.inlier_ratio >= track.quality.inlier_ratio + options_.min_inlier_gain) {
       track = std::move(*best);
     }
   }

@@ -266,13 +266,10 @@ struct Localizer::Impl {
   /// frames do not verify (a start pose decimetres off in a room).
   std::optional<SearchAnchor> start_anchor;
   std::optional<int64_t> first_t_ns;  ///< The first frame's time since create/reset (forgetTrack).
-  /// A first pose taken after lost frames without a database, with the IMU, waiting for the next
-  /// frame to confirm it (RelocalizationOptions::confirm_start): the start as it was before it.
-  struct StartOnProbation {
-    SearchAnchor anchor;
-    int64_t first_t_ns = 0;
-  };
-  std::optional<StartOnProbation> start_probation;
+  /// A first pose taken after lost frames without a database, with the IMU, waits for the next
+  /// frame to confirm it (RelocalizationOptions::confirm_start); start_anchor and first_t_ns
+  /// stay as they were before it (neither changes once a pose is taken).
+  bool start_on_probation = false;
   /// Consecutive poses the motion prior refused that count against it (refusalCountsAgainstPrior),
   /// the last one's time.
   struct Refusals {
@@ -1253,7 +1250,7 @@ struct Localizer::Impl {
     last_tracked_gray.reset();
     start_anchor.reset();
     first_t_ns.reset();
-    start_probation.reset();
+    start_on_probation = false;
     refusals = {};
     refused_stretch = {};
     restart_kept_velocity_t_ns.reset();
@@ -1301,7 +1298,7 @@ struct Localizer::Impl {
     applyBridge(motion->bridge(t_ns, prediction, guess), out);
     keyframes->frameNotTracked();  // the next frame aligns against a keyframe made at its guess
     ++untracked;
-    if (confirming || start_probation) {  // the search's (a first) pose waits for a frame to confirm it
+    if (confirming || start_on_probation) {  // the search's (a first) pose waits for a frame to confirm it
       out.state = TrackingState::kInitializing;
       out.confirming = true;
     }
@@ -1687,7 +1684,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // prior bridges it (the IMU keeps running), and no alignment, search or relocalization runs.
   if (T_world_camera_guess) {
     m.searching = m.confirming = false;
-    m.start_probation.reset();  // the caller's pose vouches
+    m.start_on_probation = false;  // the caller's pose vouches
   }
   double image_contrast = 0;
   if (m.options.image_content.min_contrast > 0) {
@@ -1883,6 +1880,8 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     out.state = TrackingState::kLost;
   }
 
+  const bool verified = out.verify_score >= m.options.verification.min_score;  // tracking's score
+
   // 5. The motion prior takes the pose (consistency gate with the IMU) or bridges the frame.
   if (prediction && prediction->inertial) {
     out.inertial_sigma_m = prediction->sigma_m;
@@ -1926,7 +1925,6 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     // Where the stretch has verified poses, the restart waits for one: on imagery whose true poses
     // verify, an unverified one is as likely a look-alike as the truth (a fast drone's filter
     // refused poses verified at 0.47 and restarted at one of 0.03, then bridged 300 m off).
-    const bool verified = out.verify_score >= m.options.verification.min_score;
     s.verified = s.verified || verified;
     refused_too_long = m.options.restart_after_refused_s > 0 &&
                        static_cast<double>(t_ns - *s.first_t_ns) * 1e-9 >= m.options.restart_after_refused_s &&
@@ -1939,8 +1937,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // after refused): it restarts at that pose at an unknown velocity, as at a start.
   const bool velocity_refused =
       out.visual_rejected && m.restart_kept_velocity_t_ns && t_ns > *m.restart_kept_velocity_t_ns &&
-      static_cast<double>(t_ns - *m.restart_kept_velocity_t_ns) * 1e-9 <= m.options.motion_search_max_gap_s &&
-      out.verify_score >= m.options.verification.min_score;
+      static_cast<double>(t_ns - *m.restart_kept_velocity_t_ns) * 1e-9 <= m.options.motion_search_max_gap_s && verified;
   if (velocity_refused) m.restart_kept_velocity_t_ns.reset();
   if (restart || refused_too_long || velocity_refused) {
     // The prior keeps its velocity, loosened (restart_sigma_velocity_m_s).
@@ -2041,17 +2038,17 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // room started 0.87 m off took look-alikes 2.5-5 m off at 0.67-0.91 seconds later, each
   // followed by frames verified at 0-0.06.
   bool start_dropped = false;
-  if (m.start_probation) {
-    const Impl::StartOnProbation probation = *m.start_probation;
-    m.start_probation.reset();
-    if (out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted &&
-        out.verify_score >= m.options.verification.min_score) {
+  if (m.start_on_probation) {
+    m.start_on_probation = false;
+    if (out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted && verified) {
       confirmed = true;  // reported kRelocalized below
     } else {
+      const std::optional<SearchAnchor> anchor = m.start_anchor;
+      const std::optional<int64_t> first_t_ns = m.first_t_ns;
       m.forgetTrack();
-      m.start_anchor = probation.anchor;
-      m.first_t_ns = probation.first_t_ns;
-      m.restartPrior(probation.anchor.T_world_camera, std::nullopt, t_ns);
+      m.start_anchor = anchor;
+      m.first_t_ns = first_t_ns;
+      m.restartPrior(anchor->T_world_camera, std::nullopt, t_ns);
       m.keyframes->frameNotTracked();    // the next frame aligns against a keyframe made at its guess
       out.state = TrackingState::kLost;  // not bridged from the pose dropped
       out.pose_filtered = false;
@@ -2140,7 +2137,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   if ((starting || start_dropped) && m.tracked_since_reset && !m.database && m.last_imu && !T_world_camera_guess &&
       m.options.relocalization.confirm_start && m.start_anchor && m.first_t_ns && t_ns != *m.first_t_ns &&
       (out.state == TrackingState::kTracking || out.state == TrackingState::kRelocalized)) {
-    m.start_probation = Impl::StartOnProbation{*m.start_anchor, *m.first_t_ns};
+    m.start_on_probation = true;
     out.state = TrackingState::kInitializing;
     out.confirming = true;
   }
