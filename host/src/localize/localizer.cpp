@@ -266,8 +266,9 @@ struct Localizer::Impl {
   /// frames do not verify (a start pose decimetres off in a room).
   std::optional<SearchAnchor> start_anchor;
   std::optional<int64_t> first_t_ns;  ///< The first frame's time since create/reset (forgetTrack).
-  /// A first pose taken after lost frames without a database, with the IMU, waits for the next
-  /// frame to confirm it (RelocalizationOptions::confirm_start); start_anchor and first_t_ns
+  /// A first pose taken after lost frames without a database, or on the start's own frame beyond
+  /// where the start pose vouches, with the IMU, waits for the next frame to confirm it
+  /// (RelocalizationOptions::confirm_start); start_anchor and first_t_ns
   /// stay as they were before it (neither changes once a pose is taken).
   bool start_on_probation = false;
   /// Consecutive poses the motion prior refused that count against it (refusalCountsAgainstPrior),
@@ -2133,9 +2134,16 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     }
   }
 
-  // A first pose after lost frames goes on probation (5a').
-  if ((starting || start_dropped) && m.tracked_since_reset && !m.database && m.last_imu && !T_world_camera_guess &&
-      m.options.relocalization.confirm_start && m.start_anchor && m.first_t_ns && t_ns != *m.first_t_ns &&
+  // A first pose after lost frames goes on probation (5a'), and so does, database or not, one
+  // tracked on the start's own frame that the start pose does not vouch for (it ended farther
+  // than local_offset_fraction x the depth from it): the city started 5.8 m and 8.7 deg off took
+  // a pose 12.8 m off at a score of 0.29 on its first frame, and the IMU bridged it for 2 s to 49 m
+  // off (with a database the next frame was relocalized, the first still reported 12.8 m off).
+  const bool start_frame_unvouched =
+      starting && !start_vouches && out.state == TrackingState::kTracking && m.first_t_ns && t_ns == *m.first_t_ns;
+  if ((starting || start_dropped) && m.tracked_since_reset && (!m.database || start_frame_unvouched) && m.last_imu &&
+      !T_world_camera_guess && m.options.relocalization.confirm_start && m.start_anchor && m.first_t_ns &&
+      (t_ns != *m.first_t_ns || start_frame_unvouched) &&
       (out.state == TrackingState::kTracking || out.state == TrackingState::kRelocalized)) {
     m.start_on_probation = true;
     out.state = TrackingState::kInitializing;

@@ -129,7 +129,9 @@ struct RelocalizationOptions {
   /// and too weakly (one wrong pose at a score of 0.18). The same holds, with the IMU and no
   /// database, for a first pose after reset() taken after lost frames (a local search's around
   /// the start pose, or an alignment from the start pose held while the camera moved on): not
-  /// confirmed, the track goes back to the start pose.
+  /// confirmed, the track goes back to the start pose. And, database or not, for a pose tracked
+  /// on the start's own frame farther than local_offset_fraction x the depth from the start pose
+  /// (a start pose metres off whose first alignment slid onto a look-alike).
   bool confirm_start = true;
   /// Starts (of all candidates) aligned fully after the probes on the deepest level, most
   /// inliers above chance first (1..100).
