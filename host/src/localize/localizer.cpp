@@ -2139,11 +2139,12 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // than local_offset_fraction x the depth from it): the city started 5.8 m and 8.7 deg off took
   // a pose 12.8 m off at a score of 0.29 on its first frame, and the IMU bridged it for 2 s to 49 m
   // off (with a database the next frame was relocalized, the first still reported 12.8 m off).
+  const bool on_first_frame = m.first_t_ns && t_ns == *m.first_t_ns;
+  const bool after_lost_frames = (starting || start_dropped) && !m.database && m.first_t_ns && !on_first_frame;
   const bool start_frame_unvouched =
-      starting && !start_vouches && out.state == TrackingState::kTracking && m.first_t_ns && t_ns == *m.first_t_ns;
-  if ((starting || start_dropped) && m.tracked_since_reset && (!m.database || start_frame_unvouched) && m.last_imu &&
-      !T_world_camera_guess && m.options.relocalization.confirm_start && m.start_anchor && m.first_t_ns &&
-      (t_ns != *m.first_t_ns || start_frame_unvouched) &&
+      starting && on_first_frame && !start_vouches && out.state == TrackingState::kTracking;
+  if ((after_lost_frames || start_frame_unvouched) && m.tracked_since_reset && m.last_imu && !T_world_camera_guess &&
+      m.options.relocalization.confirm_start && m.start_anchor &&
       (out.state == TrackingState::kTracking || out.state == TrackingState::kRelocalized)) {
     m.start_on_probation = true;
     out.state = TrackingState::kInitializing;
