@@ -175,7 +175,9 @@ TEST(Localizer, FramesWithNothingToAlignAreBridgedByTheImu) {
 }
 
 TEST(Localizer, EmptyFramesBeforeAnyPoseAndTheCheckSwitchedOff) {
-  // The first frame after reset is black: lost (the reset pose is kept), then the scene tracks.
+  // The first frame after reset is black: lost (the reset pose is kept), then the scene tracks:
+  // its first pose, after a lost frame, waits for the next frame to confirm it
+  // (RelocalizationOptions::confirm_start), which it does.
   auto localizer = makeLocalizer(KeyframeThreading::kSynchronous);
   ASSERT_TRUE(localizer);
   localizer->reset(test::localizeTruth(0));
@@ -183,9 +185,15 @@ TEST(Localizer, EmptyFramesBeforeAnyPoseAndTheCheckSwitchedOff) {
   ASSERT_TRUE(r.ok());
   EXPECT_EQ(r->state, TrackingState::kLost);
   EXPECT_EQ(r->image_content, ImageContent::kBlack);
-  r = localizer->localize(kFrameNs, test::localizeFrames(2)[1]);
+  const std::vector<ImageU8> frames = test::localizeFrames(3);
+  r = localizer->localize(kFrameNs, frames[1]);
   ASSERT_TRUE(r.ok());
-  EXPECT_EQ(r->state, TrackingState::kTracking);
+  EXPECT_EQ(r->state, TrackingState::kInitializing);
+  EXPECT_TRUE(r->confirming);
+  r = localizer->localize(2 * kFrameNs, frames[2]);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->state, TrackingState::kRelocalized);
+  EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(2)), 3e-3);
   // min_contrast 0: the check is off and a black frame goes through the alignment (lost there).
   LocalizerOptions options;
   options.keyframe_threading = KeyframeThreading::kSynchronous;

@@ -267,10 +267,13 @@ struct Localizer::Impl {
   std::optional<SearchAnchor> start_anchor;
   std::optional<int64_t> first_t_ns;  ///< The first frame's time since create/reset (forgetTrack).
   /// A first pose taken after lost frames without a database, or on the start's own frame beyond
-  /// where the start pose vouches, with the IMU, waits for the next frame to confirm it
+  /// where the start pose vouches (without the IMU: and without a database), waits for the next
+  /// frame to confirm it
   /// (RelocalizationOptions::confirm_start); start_anchor and first_t_ns
   /// stay as they were before it (neither changes once a pose is taken).
   bool start_on_probation = false;
+  std::optional<Pose> probation_pose;  ///< The pose on probation (start_on_probation), its frame's time.
+  int64_t probation_t_ns = 0;
   /// Consecutive poses the motion prior refused that count against it (refusalCountsAgainstPrior),
   /// the last one's time.
   struct Refusals {
@@ -1252,6 +1255,7 @@ struct Localizer::Impl {
     start_anchor.reset();
     first_t_ns.reset();
     start_on_probation = false;
+    probation_pose.reset();
     refusals = {};
     refused_stretch = {};
     restart_kept_velocity_t_ns.reset();
@@ -1874,8 +1878,14 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
       far_from_start = !m.localBound(*m.start_anchor, guess, t_ns).holds(track.T_world_camera.translation());
     }
   }
+  // Without the IMU a pose on the start's own frame that the start pose does not vouch for is
+  // taken only at motion_search_confident_score, as one aligned from a blind guess: nothing but
+  // its score checks it (the city started 5.8 m off took one 12.8 m off at 0.29, then lost every
+  // frame; refused, the local search found the truth).
+  const bool unvouched_start_frame_without_imu =
+      starting && !m.last_imu && !start_vouches && m.start_anchor && t_ns == m.start_anchor->t_ns;
   if (((m.database || !m.last_imu || (starting && !start_vouches)) && track.state == TrackingState::kTracking &&
-       out.verify_score < m.minTakenScore(blind_guess)) ||
+       out.verify_score < m.minTakenScore(blind_guess || unvouched_start_frame_without_imu)) ||
       far_from_start) {
     track.state = TrackingState::kLost;
     out.state = TrackingState::kLost;
@@ -2037,25 +2047,40 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // to the start (its pose, its first frame's time: the local search's bound) with the filter
   // restarted there at an unknown velocity, and this frame counts as lost (searched below). The
   // room started 0.87 m off took look-alikes 2.5-5 m off at 0.67-0.91 seconds later, each
-  // followed by frames verified at 0-0.06.
+  // followed by frames verified at 0-0.06. Before it is dropped, this frame is searched around
+  // the pose (the local search, where it runs): found within local_offset_fraction x the depth
+  // of it + growth_m_s x the seconds since its frame (the room's camera walks 0.11-0.14 m a
+  // frame), that confirms it. Without the IMU the frame after a true first pose aligns from an
+  // unknown velocity and fails where the camera turns fast, and the search finds it; a look-alike
+  // taken was not found again (the room started 0.87 m off, without its IMU: every frame after
+  // each of three look-alikes was lost, searched around them); without this, true first poses
+  // were dropped frame after frame (the room started 0.3 m off without its IMU: 32 frames lost).
   bool start_dropped = false;
+  std::optional<Pose> dropped_pose;  // the pose on probation this frame did not confirm
+  double dropped_s = 0.0;            // the seconds since its frame
   if (m.start_on_probation) {
     m.start_on_probation = false;
     if (out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted && verified) {
       confirmed = true;  // reported kRelocalized below
     } else {
-      const std::optional<SearchAnchor> anchor = m.start_anchor;
-      const std::optional<int64_t> first_t_ns = m.first_t_ns;
-      m.forgetTrack();
-      m.start_anchor = anchor;
-      m.first_t_ns = first_t_ns;
-      m.restartPrior(anchor->T_world_camera, std::nullopt, t_ns);
-      m.keyframes->frameNotTracked();    // the next frame aligns against a keyframe made at its guess
-      out.state = TrackingState::kLost;  // not bridged from the pose dropped
+      dropped_pose = m.probation_pose;
+      dropped_s = static_cast<double>(t_ns - m.probation_t_ns) * 1e-9;
+      out.state = TrackingState::kLost;  // searched below, then dropped unless found near it
       out.pose_filtered = false;
-      start_dropped = true;
     }
   }
+  auto dropStart = [&] {
+    const std::optional<SearchAnchor> anchor = m.start_anchor;
+    const std::optional<int64_t> first_t_ns = m.first_t_ns;
+    m.forgetTrack();
+    m.start_anchor = anchor;
+    m.first_t_ns = first_t_ns;
+    m.restartPrior(anchor->T_world_camera, std::nullopt, t_ns);
+    m.keyframes->frameNotTracked();    // the next frame aligns against a keyframe made at its guess
+    out.state = TrackingState::kLost;  // not bridged from the pose dropped
+    out.pose_filtered = false;
+    start_dropped = true;
+  };
 
   // 5b. Relocalization: with a keyframe database, a frame not tracked after
   // after_untracked_frames in a row is searched for around the prediction, in a region that
@@ -2063,90 +2088,111 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // prediction's uncertainty and every search that found nothing; without one, among keyframes
   // rendered around the last tracked pose, before one around the start pose
   // (local_after_untracked_frames).
-  if (out.state == TrackingState::kTracking) {
-    m.untracked = 0;
-    m.failed_searches = 0;
-    m.last_tracked_t_ns = t_ns;
-  } else {
-    ++m.untracked;
-    const RelocalizationOptions& o = m.options.relocalization;
-    const double since_s = m.sinceTrackedS(t_ns);
-    const std::optional<SearchAnchor> anchor = m.searchAnchor();
-    if (!m.database && m.localSearchInReach(t_ns) && m.untracked >= o.local_after_untracked_frames &&
-        gray.width >= kThumbnailWidth && gray.height >= kThumbnailHeight && anchor->scene_depth_m > 0 &&
-        (!prediction || !prediction->inertial || !m.tracked_since_reset ||
-         3.0 * out.inertial_sigma_m > o.local_offset_fraction * anchor->scene_depth_m)) {
-      // Without a database: keyframes rendered around the last tracked pose (before the first
-      // one: the start pose) on the first frame with something to recognise (the depth: the last
-      // tracked frame's keyframe's). With the IMU only once its prediction may lie outside the
-      // alignment's basin (3 sigma beyond local_offset_fraction of the depth): bridged frames a
-      // few millimetres uncertain need no search (the room's frame 92, relocalized 12.6 mm off at
-      // a score of 0.27, was bridged 1.9 mm off); at the start at once (no pose has verified).
-      const double depth_m = anchor->scene_depth_m;
-      Result<ImageU8> thumbnail = descriptorThumbnail(gray);
-      if (!thumbnail.ok()) return thumbnail.error();
-      if (thumbnailContrast(*thumbnail) >= o.min_contrast) {
-        const Pose& T_last = anchor->T_world_camera;
-        // Made again after a tracked frame, and when the prediction has moved on by more than
-        // local_offset_fraction of the depth from the one it was made at.
-        if (!m.local_database || !m.local_database_pose || m.local_database_pose->matrix() != T_last.matrix() ||
-            !((guess.translation() - m.local_database_guess).norm() <= o.local_offset_fraction * depth_m)) {
-          Result<KeyframeDatabase> local = m.localDatabase(T_last, guess.translation(), depth_m, m.local_views, out);
-          if (!local.ok()) return local.error();
-          m.local_database = std::move(local).value();
-          m.local_database_pose = T_last;
-          m.local_database_guess = guess.translation();
-          out.reference_rendered = true;  // the frame waited for renders (worker mode's pacing)
+  auto searchUntracked = [&]() -> Status {
+    if (out.state == TrackingState::kTracking) {
+      m.untracked = 0;
+      m.failed_searches = 0;
+      m.last_tracked_t_ns = t_ns;
+    } else {
+      ++m.untracked;
+      const RelocalizationOptions& o = m.options.relocalization;
+      const double since_s = m.sinceTrackedS(t_ns);
+      const std::optional<SearchAnchor> anchor = m.searchAnchor();
+      if (!m.database && m.localSearchInReach(t_ns) && m.untracked >= o.local_after_untracked_frames &&
+          gray.width >= kThumbnailWidth && gray.height >= kThumbnailHeight && anchor->scene_depth_m > 0 &&
+          (!prediction || !prediction->inertial || !m.tracked_since_reset ||
+           3.0 * out.inertial_sigma_m > o.local_offset_fraction * anchor->scene_depth_m)) {
+        // Without a database: keyframes rendered around the last tracked pose (before the first
+        // one: the start pose) on the first frame with something to recognise (the depth: the last
+        // tracked frame's keyframe's). With the IMU only once its prediction may lie outside the
+        // alignment's basin (3 sigma beyond local_offset_fraction of the depth): bridged frames a
+        // few millimetres uncertain need no search (the room's frame 92, relocalized 12.6 mm off at
+        // a score of 0.27, was bridged 1.9 mm off); at the start at once (no pose has verified).
+        const double depth_m = anchor->scene_depth_m;
+        Result<ImageU8> thumbnail = descriptorThumbnail(gray);
+        if (!thumbnail.ok()) return thumbnail.error();
+        if (thumbnailContrast(*thumbnail) >= o.min_contrast) {
+          const Pose& T_last = anchor->T_world_camera;
+          // Made again after a tracked frame, and when the prediction has moved on by more than
+          // local_offset_fraction of the depth from the one it was made at.
+          if (!m.local_database || !m.local_database_pose || m.local_database_pose->matrix() != T_last.matrix() ||
+              !((guess.translation() - m.local_database_guess).norm() <= o.local_offset_fraction * depth_m)) {
+            Result<KeyframeDatabase> local = m.localDatabase(T_last, guess.translation(), depth_m, m.local_views, out);
+            if (!local.ok()) return local.error();
+            m.local_database = std::move(local).value();
+            m.local_database_pose = T_last;
+            m.local_database_guess = guess.translation();
+            out.reference_rendered = true;  // the frame waited for renders (worker mode's pacing)
+          }
+          // A pose no farther than local_depth_fraction of the scene depth (a drone over a city
+          // moves metres between frames, a hand in a room decimetres) + growth_m_s x the seconds
+          // since the last tracked frame from the path between the last tracked position and the
+          // prediction: a look-alike place elsewhere verifies as well (the room without its IMU:
+          // 4.9 m off at 0.92, 0.65 s after its last tracked frame; at 10 Hz 2.06 m off at 1.0,
+          // 0.1 s after it, under a bound of 2 m + 2 m/s).
+          const Impl::LocalBound bound = m.localBound(*anchor, guess, t_ns);
+          TrackResult found;
+          Result<bool> searched =
+              m.relocalize(*m.local_database, bound, gray, t_ns, std::nullopt, found, out, &m.local_views);
+          if (!searched.ok()) return searched.error();
+          if (*searched) {
+            m.adoptRelocalized(found, t_ns, gray, T_world_camera_guess ? std::nullopt : prediction, previous_t_ns, out,
+                               true);
+          } else {
+            ++m.failed_searches;
+          }
         }
-        // A pose no farther than local_depth_fraction of the scene depth (a drone over a city
-        // moves metres between frames, a hand in a room decimetres) + growth_m_s x the seconds
-        // since the last tracked frame from the path between the last tracked position and the
-        // prediction: a look-alike place elsewhere verifies as well (the room without its IMU:
-        // 4.9 m off at 0.92, 0.65 s after its last tracked frame; at 10 Hz 2.06 m off at 1.0,
-        // 0.1 s after it, under a bound of 2 m + 2 m/s).
-        const Impl::LocalBound bound = m.localBound(*anchor, guess, t_ns);
+      }
+      if (m.database && o.after_untracked_frames > 0 && m.untracked >= o.after_untracked_frames) {
+        SearchRegion region;
+        region.center_world = guess.translation();
+        region.radius_m =
+            std::min(o.max_radius_m, (o.min_radius_m + o.growth_m_s * since_s + 3.0 * out.inertial_sigma_m) *
+                                         std::ldexp(1.0, std::min(m.failed_searches, 30)));
         TrackResult found;
-        Result<bool> searched =
-            m.relocalize(*m.local_database, bound, gray, t_ns, std::nullopt, found, out, &m.local_views);
+        Result<bool> searched = m.relocalize(*m.database, std::nullopt, gray, t_ns, region, found, out);
         if (!searched.ok()) return searched.error();
         if (*searched) {
-          m.adoptRelocalized(found, t_ns, gray, T_world_camera_guess ? std::nullopt : prediction, previous_t_ns, out,
-                             true);
+          m.adoptRelocalized(found, t_ns, gray, T_world_camera_guess ? std::nullopt : prediction, previous_t_ns, out);
         } else {
           ++m.failed_searches;
         }
       }
     }
-    if (m.database && o.after_untracked_frames > 0 && m.untracked >= o.after_untracked_frames) {
-      SearchRegion region;
-      region.center_world = guess.translation();
-      region.radius_m =
-          std::min(o.max_radius_m, (o.min_radius_m + o.growth_m_s * since_s + 3.0 * out.inertial_sigma_m) *
-                                       std::ldexp(1.0, std::min(m.failed_searches, 30)));
-      TrackResult found;
-      Result<bool> searched = m.relocalize(*m.database, std::nullopt, gray, t_ns, region, found, out);
-      if (!searched.ok()) return searched.error();
-      if (*searched) {
-        m.adoptRelocalized(found, t_ns, gray, T_world_camera_guess ? std::nullopt : prediction, previous_t_ns, out);
-      } else {
-        ++m.failed_searches;
-      }
+    return Status::success();
+  };
+  if (Status searched = searchUntracked(); !searched.ok()) return searched.error();
+  if (dropped_pose) {
+    const RelocalizationOptions& o = m.options.relocalization;
+    if (out.state == TrackingState::kRelocalized && m.start_anchor &&
+        (out.T_world_camera.translation() - dropped_pose->translation()).norm() <=
+            o.local_offset_fraction * m.start_anchor->scene_depth_m + o.growth_m_s * dropped_s) {
+      confirmed = true;
+    } else {
+      dropStart();  // and the frame is searched again, around the start pose
+      if (Status searched = searchUntracked(); !searched.ok()) return searched.error();
     }
   }
 
-  // A first pose after lost frames goes on probation (5a'), and so does, database or not, one
-  // tracked on the start's own frame that the start pose does not vouch for (it ended farther
-  // than local_offset_fraction x the depth from it): the city started 5.8 m and 8.7 deg off took
-  // a pose 12.8 m off at a score of 0.29 on its first frame, and the IMU bridged it for 2 s to 49 m
+  // A first pose after lost frames goes on probation (5a'), IMU or not, and so does one tracked
+  // on the start's own frame that the start pose does not vouch for (it ended farther than
+  // local_offset_fraction x the depth from it): the city started 5.8 m and 8.7 deg off took a
+  // pose 12.8 m off at a score of 0.29 on its first frame, and the IMU bridged it for 2 s to 49 m
   // off (with a database the next frame was relocalized, the first still reported 12.8 m off).
+  // Without the IMU, where the confirming frame aligns from an unknown velocity, only with no
+  // database, which would otherwise find the truth (RelocalizationOptions::confirm_start): there
+  // the pose taken anchors the local search, and the room started 0.87 m off without its IMU
+  // took look-alikes 2.5-5 m off at 0.67-0.91 and lost every frame after them for seconds.
   const bool on_first_frame = m.first_t_ns && t_ns == *m.first_t_ns;
   const bool after_lost_frames = (starting || start_dropped) && !m.database && m.first_t_ns && !on_first_frame;
-  const bool start_frame_unvouched =
-      starting && on_first_frame && !start_vouches && out.state == TrackingState::kTracking;
-  if ((after_lost_frames || start_frame_unvouched) && m.tracked_since_reset && m.last_imu && !T_world_camera_guess &&
+  const bool start_frame_unvouched = starting && on_first_frame && !start_vouches &&
+                                     out.state == TrackingState::kTracking && (m.last_imu || !m.database);
+  if ((after_lost_frames || start_frame_unvouched) && !confirmed && m.tracked_since_reset && !T_world_camera_guess &&
       m.options.relocalization.confirm_start && m.start_anchor &&
       (out.state == TrackingState::kTracking || out.state == TrackingState::kRelocalized)) {
     m.start_on_probation = true;
+    m.probation_pose = out.T_world_camera;
+    m.probation_t_ns = t_ns;
     out.state = TrackingState::kInitializing;
     out.confirming = true;
   }

@@ -126,12 +126,18 @@ struct RelocalizationOptions {
   /// Only with the IMU (readings given since startSearch), whose propagation carries the pose to
   /// the next frame: without it that frame aligns from an unknown velocity, from the deepest
   /// level, and confirmed too few true poses (the room's STAR queries: 47 % recovered, not 83 %)
-  /// and too weakly (one wrong pose at a score of 0.18). The same holds, with the IMU and no
-  /// database, for a first pose after reset() taken after lost frames (a local search's around
-  /// the start pose, or an alignment from the start pose held while the camera moved on): not
-  /// confirmed, the track goes back to the start pose. And, database or not, for a pose tracked
-  /// on the start's own frame farther than local_offset_fraction x the depth from the start pose
-  /// (a start pose metres off whose first alignment slid onto a look-alike).
+  /// and too weakly (one wrong pose at a score of 0.18). The same holds, with no database, IMU or
+  /// not, for a first pose after reset() taken after lost frames (a local search's around the
+  /// start pose, or an alignment from the start pose held while the camera moved on): confirmed
+  /// also by the next frame's local search finding a pose within local_offset_fraction x the
+  /// depth + growth_m_s x the seconds since of it; else the track goes back to the start pose.
+  /// Without the IMU too, as there the pose taken is the only anchor of the local search, and a
+  /// look-alike taken kept it away from the truth (the room started 0.87 m off: three poses
+  /// 2.5-5 m off, then lost for seconds). And for a pose tracked on the start's own frame
+  /// farther than local_offset_fraction x the depth from the start pose (a start pose metres
+  /// off whose first alignment slid onto a look-alike): with the IMU database or not, without
+  /// it with no database (without the IMU such a pose is taken only at
+  /// LocalizerOptions::motion_search_confident_score).
   bool confirm_start = true;
   /// Starts (of all candidates) aligned fully after the probes on the deepest level, most
   /// inliers above chance first (1..100).
