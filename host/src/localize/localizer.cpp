@@ -2048,7 +2048,8 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // restarted there at an unknown velocity, and this frame counts as lost (searched below). The
   // room started 0.87 m off took look-alikes 2.5-5 m off at 0.67-0.91 seconds later, each
   // followed by frames verified at 0-0.06. Before it is dropped, this frame is searched around
-  // the pose (the local search, where it runs): found within local_offset_fraction x the depth
+  // the pose (without a database: the local search, where it runs; a database's search is not
+  // known to miss a look-alike found once): found within local_offset_fraction x the depth
   // of it + growth_m_s x the seconds since its frame (the room's camera walks 0.11-0.14 m a
   // frame), that confirms it. Without the IMU the frame after a true first pose aligns from an
   // unknown velocity and fails where the camera turns fast, and the search finds it; a look-alike
@@ -2056,19 +2057,6 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // each of three look-alikes was lost, searched around them); without this, true first poses
   // were dropped frame after frame (the room started 0.3 m off without its IMU: 32 frames lost).
   bool start_dropped = false;
-  std::optional<Pose> dropped_pose;  // the pose on probation this frame did not confirm
-  double dropped_s = 0.0;            // the seconds since its frame
-  if (m.start_on_probation) {
-    m.start_on_probation = false;
-    if (out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted && verified) {
-      confirmed = true;  // reported kRelocalized below
-    } else {
-      dropped_pose = m.probation_pose;
-      dropped_s = static_cast<double>(t_ns - m.probation_t_ns) * 1e-9;
-      out.state = TrackingState::kLost;  // searched below, then dropped unless found near it
-      out.pose_filtered = false;
-    }
-  }
   auto dropStart = [&] {
     const std::optional<SearchAnchor> anchor = m.start_anchor;
     const std::optional<int64_t> first_t_ns = m.first_t_ns;
@@ -2081,6 +2069,21 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     out.pose_filtered = false;
     start_dropped = true;
   };
+  std::optional<Pose> dropped_pose;  // the pose on probation this frame did not confirm
+  double dropped_s = 0.0;            // the seconds since its frame
+  if (m.start_on_probation) {
+    m.start_on_probation = false;
+    if (out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted && verified) {
+      confirmed = true;  // reported kRelocalized below
+    } else if (m.database) {
+      dropStart();
+    } else {
+      dropped_pose = m.probation_pose;
+      dropped_s = static_cast<double>(t_ns - m.probation_t_ns) * 1e-9;
+      out.state = TrackingState::kLost;  // searched below, then dropped unless found near it
+      out.pose_filtered = false;
+    }
+  }
 
   // 5b. Relocalization: with a keyframe database, a frame not tracked after
   // after_untracked_frames in a row is searched for around the prediction, in a region that
