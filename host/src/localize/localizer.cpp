@@ -2048,8 +2048,9 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // restarted there at an unknown velocity, and this frame counts as lost (searched below). The
   // room started 0.87 m off took look-alikes 2.5-5 m off at 0.67-0.91 seconds later, each
   // followed by frames verified at 0-0.06. Before it is dropped, this frame is searched around
-  // the pose (without a database: the local search, where it runs; a database's search is not
-  // known to miss a look-alike found once): found within local_offset_fraction x the depth
+  // the pose (without the IMU or a database: the local search, where it runs; a database's
+  // search is not known to miss a look-alike found once, and with the IMU a frame taken unverified
+  // is the search's anchor, not the pose): found within local_offset_fraction x the depth
   // of it + growth_m_s x the seconds since its frame (the room's camera walks 0.11-0.14 m a
   // frame), that confirms it. Without the IMU the frame after a true first pose aligns from an
   // unknown velocity and fails where the camera turns fast, and the search finds it; a look-alike
@@ -2075,7 +2076,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     m.start_on_probation = false;
     if (out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted && verified) {
       confirmed = true;  // reported kRelocalized below
-    } else if (m.database) {
+    } else if (m.database || m.last_imu) {
       dropStart();
     } else {
       dropped_pose = m.probation_pose;
@@ -2164,7 +2165,10 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     }
     return Status::success();
   };
-  if (Status searched = searchUntracked(); !searched.ok()) return searched.error();
+  if (Status searched = searchUntracked(); !searched.ok()) {
+    if (dropped_pose) dropStart();  // not kept unconfirmed
+    return searched.error();
+  }
   if (dropped_pose) {
     const RelocalizationOptions& o = m.options.relocalization;
     if (out.state == TrackingState::kRelocalized && m.start_anchor &&

@@ -128,9 +128,9 @@ struct RelocalizationOptions {
   /// level, and confirmed too few true poses (the room's STAR queries: 47 % recovered, not 83 %)
   /// and too weakly (one wrong pose at a score of 0.18). The same holds, with no database, IMU or
   /// not, for a first pose after reset() taken after lost frames (a local search's around the
-  /// start pose, or an alignment from the start pose held while the camera moved on): confirmed
-  /// also by the next frame's local search finding a pose within local_offset_fraction x the
-  /// depth + growth_m_s x the seconds since of it; else the track goes back to the start pose.
+  /// start pose, or an alignment from the start pose held while the camera moved on), without
+  /// the IMU also by the next frame's local search finding a pose within local_offset_fraction x
+  /// the depth + growth_m_s x the seconds since of it; else the track goes back to the start pose.
   /// Without the IMU too, as there the pose taken is the only anchor of the local search, and a
   /// look-alike taken kept it away from the truth (the room started 0.87 m off: three poses
   /// 2.5-5 m off, then lost for seconds). And for a pose tracked on the start's own frame
