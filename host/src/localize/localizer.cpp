@@ -8,6 +8,7 @@
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "vkloc/core/clock.hpp"
 #include "vkloc/core/numeric.hpp"
@@ -269,11 +270,9 @@ struct Localizer::Impl {
   /// A first pose taken after lost frames without a database, or on the start's own frame beyond
   /// where the start pose vouches (without the IMU: and without a database), waits for the next
   /// frame to confirm it
-  /// (RelocalizationOptions::confirm_start); start_anchor and first_t_ns
-  /// stay as they were before it (neither changes once a pose is taken).
-  bool start_on_probation = false;
-  std::optional<Pose> probation_pose;  ///< The pose on probation (start_on_probation), its frame's time.
-  int64_t probation_t_ns = 0;
+  /// (RelocalizationOptions::confirm_start): that pose and its frame's time while it waits;
+  /// start_anchor and first_t_ns stay as they were before it (neither changes once a pose is taken).
+  std::optional<SearchAnchor> start_on_probation;
   /// Consecutive poses the motion prior refused that count against it (refusalCountsAgainstPrior),
   /// the last one's time.
   struct Refusals {
@@ -1254,8 +1253,7 @@ struct Localizer::Impl {
     last_tracked_gray.reset();
     start_anchor.reset();
     first_t_ns.reset();
-    start_on_probation = false;
-    probation_pose.reset();
+    start_on_probation.reset();
     refusals = {};
     refused_stretch = {};
     restart_kept_velocity_t_ns.reset();
@@ -1689,7 +1687,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // prior bridges it (the IMU keeps running), and no alignment, search or relocalization runs.
   if (T_world_camera_guess) {
     m.searching = m.confirming = false;
-    m.start_on_probation = false;  // the caller's pose vouches
+    m.start_on_probation.reset();  // the caller's pose vouches
   }
   double image_contrast = 0;
   if (m.options.image_content.min_contrast > 0) {
@@ -2070,17 +2068,15 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     out.pose_filtered = false;
     start_dropped = true;
   };
-  std::optional<Pose> dropped_pose;  // the pose on probation this frame did not confirm
-  double dropped_s = 0.0;            // the seconds since its frame
+  std::optional<SearchAnchor> dropped;  // the pose on probation this frame did not confirm
   if (m.start_on_probation) {
-    m.start_on_probation = false;
+    const SearchAnchor probation = *std::exchange(m.start_on_probation, std::nullopt);
     if (out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted && verified) {
       confirmed = true;  // reported kRelocalized below
     } else if (m.database || m.last_imu) {
       dropStart();
     } else {
-      dropped_pose = m.probation_pose;
-      dropped_s = static_cast<double>(t_ns - m.probation_t_ns) * 1e-9;
+      dropped = probation;
       out.state = TrackingState::kLost;  // searched below, then dropped unless found near it
       out.pose_filtered = false;
     }
@@ -2166,13 +2162,14 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     return Status::success();
   };
   if (Status searched = searchUntracked(); !searched.ok()) {
-    if (dropped_pose) dropStart();  // not kept unconfirmed
+    if (dropped) dropStart();  // not kept unconfirmed
     return searched.error();
   }
-  if (dropped_pose) {
+  if (dropped) {
     const RelocalizationOptions& o = m.options.relocalization;
+    const double dropped_s = static_cast<double>(t_ns - dropped->t_ns) * 1e-9;  // seconds since its frame
     if (out.state == TrackingState::kRelocalized && m.start_anchor &&
-        (out.T_world_camera.translation() - dropped_pose->translation()).norm() <=
+        (out.T_world_camera.translation() - dropped->T_world_camera.translation()).norm() <=
             o.local_offset_fraction * m.start_anchor->scene_depth_m + o.growth_m_s * dropped_s) {
       confirmed = true;
     } else {
@@ -2197,9 +2194,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   if ((after_lost_frames || start_frame_unvouched) && !confirmed && m.tracked_since_reset && !T_world_camera_guess &&
       m.options.relocalization.confirm_start && m.start_anchor &&
       (out.state == TrackingState::kTracking || out.state == TrackingState::kRelocalized)) {
-    m.start_on_probation = true;
-    m.probation_pose = out.T_world_camera;
-    m.probation_t_ns = t_ns;
+    m.start_on_probation = SearchAnchor{out.T_world_camera, t_ns, out.scene_depth_m};
     out.state = TrackingState::kInitializing;
     out.confirming = true;
   }
