@@ -2161,6 +2161,8 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     }
     return Status::success();
   };
+  std::optional<LocalizationResult> before_search;  // what a dropped pose's frame reports (below)
+  if (dropped) before_search = out;
   if (Status searched = searchUntracked(); !searched.ok()) {
     if (dropped) dropStart();  // not kept unconfirmed
     return searched.error();
@@ -2173,8 +2175,21 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
             o.local_offset_fraction * m.start_anchor->scene_depth_m + o.growth_m_s * dropped_s) {
       confirmed = true;
     } else {
+      // The first search's pose is not this frame's: the frame reports what it had before that
+      // search, and the time and candidates of both searches.
+      const double first_search_ms = std::exchange(out.relocalization_ms, 0.0);
+      out.T_world_camera = before_search->T_world_camera;
+      out.covariance = before_search->covariance;
+      out.quality = before_search->quality;
+      out.verify_score = before_search->verify_score;
+      out.visual_rejected = before_search->visual_rejected;
+      out.scene_depth_m = before_search->scene_depth_m;
+      out.reference_points = before_search->reference_points;
+      out.keyframe_id = before_search->keyframe_id;
+      out.keyframe_age_frames = before_search->keyframe_age_frames;
       dropStart();  // and the frame is searched again, around the start pose
       if (Status searched = searchUntracked(); !searched.ok()) return searched.error();
+      out.relocalization_ms += first_search_ms;
     }
   }
 
