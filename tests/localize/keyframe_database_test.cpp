@@ -630,6 +630,46 @@ TEST(Relocalization, WithoutADatabaseKeyframesRenderedAroundTheLastPoseFindAFast
   }
 }
 
+TEST(Localizer, WithoutTheImuATurnThatSpedUpIsFoundFromTheLastTrackedFrame) {
+  // No IMU, no database: the constant-velocity prediction holds the last turn (0.5 deg a frame
+  // here), and a turn that speeds up leaves it degrees off. The frame is given the motion
+  // search's starts from the last tracked frame (point features matched with it, image shifts)
+  // and tracked, where it went to the local search (0.6-1.3 s a frame on the room without its
+  // IMU) or was lost. Here three frames tracked, then the view from frame 3's position turned by
+  // kTurnDeg about its vertical axis. The control, the motion search off (motion_search_steps 0),
+  // searches the keyframes rendered around the last pose for it.
+  constexpr double kTurnDeg = 15.0;
+  const Pose turned = turnedView(test::localizeTruth(3), kTurnDeg);
+  auto view = renderReference(test::makeAsymmetricScene(), test::localizeCamera(), turned);
+  ASSERT_TRUE(view.ok()) << view.error().message;
+  for (const bool search : {true, false}) {
+    SCOPED_TRACE(search);
+    LocalizerOptions options;
+    if (!search) options.motion_search_steps = 0;
+    auto created = plainLocalizer(options);
+    ASSERT_TRUE(created);
+    Localizer& localizer = *created;
+    for (int i = 0; i < 3; ++i) {
+      const Result<LocalizationResult> r = localizer.localize(i * 50'000'000, asymmetricFrame(i));
+      ASSERT_TRUE(r.ok() && r->state == TrackingState::kTracking) << i;
+    }
+    const Result<LocalizationResult> r = localizer.localize(150'000'000, view->gray);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    if (search) {
+      EXPECT_EQ(r->state, TrackingState::kTracking) << "score " << r->verify_score;
+      EXPECT_GT(r->motion_search_probes, 0);
+      EXPECT_EQ(r->relocalization_candidates, 0) << "no relocalization search";
+    } else {
+      EXPECT_EQ(r->motion_search_probes, 0);
+      EXPECT_GT(r->relocalization_candidates, 0) << "the plain alignment did not track it";
+    }
+    if (r->state == TrackingState::kTracking || r->state == TrackingState::kRelocalized) {
+      EXPECT_LT(test::translationError(r->T_world_camera, turned), 5e-3);
+      EXPECT_LT(test::rotationErrorDeg(r->T_world_camera, turned), 0.3);
+    }
+  }
+}
+
 TEST(Relocalization, WithoutTheImuALocalSearchsPoseGoesOnAtTheVelocitySinceTheLastTrackedOne) {
   // No IMU, no database: three frames tracked, a black one, then a view turned 40 deg (found by
   // the local search). The motion from the last tracked pose to the found one, over the 0.1 s
