@@ -636,16 +636,32 @@ TEST(Localizer, WithoutTheImuATurnThatSpedUpIsFoundFromTheLastTrackedFrame) {
   // search's starts from the last tracked frame (point features matched with it, image shifts)
   // and tracked, where it went to the local search (0.6-1.3 s a frame on the room without its
   // IMU) or was lost. Here three frames tracked, then the view from frame 3's position turned by
-  // kTurnDeg about its vertical axis. The control, the motion search off (motion_search_steps 0),
-  // searches the keyframes rendered around the last pose for it.
-  constexpr double kTurnDeg = 15.0;
-  const Pose turned = turnedView(test::localizeTruth(3), kTurnDeg);
-  auto view = renderReference(test::makeAsymmetricScene(), test::localizeCamera(), turned);
-  ASSERT_TRUE(view.ok()) << view.error().message;
-  for (const bool search : {true, false}) {
-    SCOPED_TRACE(search);
+  // 15 deg about its vertical axis (moved 0.3 m across the view too in the bound's cases).
+  // - kStarts: tracked from the starts, no relocalization search; kOff, the search off
+  //   (motion_search_steps 0): the local search relocalizes it.
+  // - kShiftOnly: the feature start off, the image shift's start alone tracks it (verified above
+  //   motion_search_confident_score); kShiftNotConfident: with that score set above any the
+  //   frame reaches, the start's result is not taken (no gate checks it) and the local search
+  //   relocalizes the frame.
+  // - kBoundHolds: the view 0.3 m away, tracked from the starts; kBoundRefuses: the local
+  //   search's bound shrunk to 0.1 m (local_depth_fraction 0.05 of ~2 m, growth_m_s 0): not
+  //   taken, and lost (the local search keeps to the same bound).
+  enum Case { kStarts, kOff, kShiftOnly, kShiftNotConfident, kBoundHolds, kBoundRefuses };
+  for (const Case c : {kStarts, kOff, kShiftOnly, kShiftNotConfident, kBoundHolds, kBoundRefuses}) {
+    SCOPED_TRACE(c);
+    const bool moved = c == kBoundHolds || c == kBoundRefuses;
+    Pose turned = turnedView(test::localizeTruth(3), 15.0);
+    if (moved) turned.translation() += turned.linear() * Eigen::Vector3d(0.3, 0.0, 0.0);
+    auto view = renderReference(test::makeAsymmetricScene(), test::localizeCamera(), turned);
+    ASSERT_TRUE(view.ok()) << view.error().message;
     LocalizerOptions options;
-    if (!search) options.motion_search_steps = 0;
+    if (c == kOff) options.motion_search_steps = 0;
+    if (c == kShiftOnly || c == kShiftNotConfident) options.motion_search_feature_start = false;
+    if (c == kShiftNotConfident) options.motion_search_confident_score = 0.999;
+    if (c == kBoundRefuses) {
+      options.relocalization.local_depth_fraction = 0.05;
+      options.relocalization.growth_m_s = 0.0;
+    }
     auto created = plainLocalizer(options);
     ASSERT_TRUE(created);
     Localizer& localizer = *created;
@@ -655,13 +671,15 @@ TEST(Localizer, WithoutTheImuATurnThatSpedUpIsFoundFromTheLastTrackedFrame) {
     }
     const Result<LocalizationResult> r = localizer.localize(150'000'000, view->gray);
     ASSERT_TRUE(r.ok()) << r.error().message;
-    if (search) {
+    EXPECT_EQ(r->motion_search_probes > 0, c != kOff) << "the starts ran";
+    if (c == kStarts || c == kShiftOnly || c == kBoundHolds) {
       EXPECT_EQ(r->state, TrackingState::kTracking) << "score " << r->verify_score;
-      EXPECT_GT(r->motion_search_probes, 0);
       EXPECT_EQ(r->relocalization_candidates, 0) << "no relocalization search";
+    } else if (c == kBoundRefuses) {
+      EXPECT_EQ(r->state, TrackingState::kLost) << "score " << r->verify_score;
     } else {
-      EXPECT_EQ(r->motion_search_probes, 0);
-      EXPECT_GT(r->relocalization_candidates, 0) << "the plain alignment did not track it";
+      EXPECT_EQ(r->state, TrackingState::kRelocalized) << "score " << r->verify_score;
+      EXPECT_GT(r->relocalization_candidates, 0);
     }
     if (r->state == TrackingState::kTracking || r->state == TrackingState::kRelocalized) {
       EXPECT_LT(test::translationError(r->T_world_camera, turned), 5e-3);
