@@ -1810,17 +1810,26 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // own, and the motion from it to a look-alike place's next view is as consistent as the
   // truth's (the room started 0.87 m off: a pose 4.9 m off at 0.67, confirmed so at 0.68).
   // With no gate to check them, its many starts' results are taken only when confidently
-  // verified, or when a feature start and the edges agree (the room with a database, a jump of
+  // verified, or when a feature start and the edges agree at the score a pose needs anyway
+  // (step 5: tracking's, or the confident one after a blind guess) (the room with a database, a jump of
   // 3 m: an image shift's start converged 4 m and 78 deg off the truth, verified above tracking's
   // score). And only within the local search's bound of the path from the last tracked pose to
   // the prediction (every 3rd image of the room: an image shift's start converged on a look-alike
   // 4.0 m away at 0.80, where the camera had moved 0.3 m).
+  // The starts need the last tracked frame within motion_search_max_gap_s, and run where the
+  // plain pose would not be taken: below tracking's score, or below the confident one after a
+  // blind guess (blind_guess: step 5's rules, below).
+  const bool can_search = m.database || m.localSearchInReach(t_ns);
+  const bool blind_guess = prediction && !prediction->inertial &&
+                           ((previous_t_ns && m.last_relocalized_t_ns == previous_t_ns) ||
+                            (m.untracked > 0 && can_search && !T_world_camera_guess));
   bool confident_only = false;
   std::optional<Impl::LocalBound> search_bound;
   if (!grid && !T_world_camera_guess && prediction && !prediction->inertial && !m.last_imu && m.tracked_since_reset &&
-      !m.start_on_probation) {
+      !m.start_on_probation && m.last_tracked_gray &&
+      static_cast<double>(t_ns - m.last_tracked_gray->t_ns) * 1e-9 <= m.options.motion_search_max_gap_s) {
     const double plain_score = track.state == TrackingState::kTracking ? scoreOf(track) : 0.0;
-    if (plain_score < m.minTakenScore(prediction->velocity_unobserved)) {
+    if (plain_score < m.minTakenScore(prediction->velocity_unobserved || blind_guess)) {
       const std::optional<SearchAnchor> anchor = m.searchAnchor();
       if (anchor && anchor->scene_depth_m > 0) {
         grid = m.startsGrid();
@@ -1887,10 +1896,6 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // tracked again. A caller's guess is not the carried motion. Before a first pose is taken the
   // guess is the start pose held while the camera moves on, as blind (the room started 0.87 m
   // off: frames after lost ones tracked 3.7 m off at 0.23-0.27).
-  const bool can_search = m.database || m.localSearchInReach(t_ns);
-  const bool blind_guess = prediction && !prediction->inertial &&
-                           ((previous_t_ns && m.last_relocalized_t_ns == previous_t_ns) ||
-                            (m.untracked > 0 && can_search && !T_world_camera_guess));
   // Without an IMU (no reading since the start) nothing else checks a pose: it is taken only when
   // verified too, database or not (taken, a pose metres off was reported as tracked and tracked on: the
   // room without its IMU, after its 190 deg/s turn at frame 86, 2-3 m off at scores 0-0.12).

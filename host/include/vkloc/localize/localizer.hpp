@@ -287,9 +287,10 @@ struct LocalizerOptions {
   /// Without the IMU (a constant-velocity prior: no covariance, no gate) a frame that does not
   /// verify gets the starts from the last tracked frame alone (point features, image shifts; no
   /// grid), unless that frame's pose is on probation (relocalization.confirm_start); a result is
-  /// then taken only at motion_search_confident_score (or when the edges agree with the feature
-  /// start) and within the local search's bound of the path from the last tracked pose to the
-  /// prediction (relocalization.local_depth_fraction, growth_m_s).
+  /// then taken only at motion_search_confident_score (or, when the edges agree with the feature
+  /// start, at the score any pose needs without the IMU) and within the local search's bound of
+  /// the path from the last tracked pose to the prediction (relocalization.local_depth_fraction,
+  /// growth_m_s).
   /// 0 steps = off.
   int motion_search_steps = 6;
   int motion_search_candidates = 3;
