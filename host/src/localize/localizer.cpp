@@ -569,7 +569,8 @@ struct Localizer::Impl {
   /// `incumbent_score`: 0 for the others); returns it unchanged when the search finds nothing
   /// tracked, not refused and verified above both the search's minimum and incumbent_score.
   /// `confident_only`: the search's minimum is motion_search_confident_score (no gate checks a
-  /// result; a feature start the edges agree with is taken as always).
+  /// result; a feature start the edges agree with is returned as always, and the caller's rules
+  /// for any pose then apply).
   template <typename AlignFrom, typename Refused>
   Result<TrackResult> motionSearch(const SearchGrid& grid, const MotionPrediction& prediction, const Pose& guess,
                                    const ImageU8& gray_now, TrackResult lost, double incumbent_score,
@@ -1804,38 +1805,33 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   std::optional<double> incumbent_score;
   // Without the IMU the constant-velocity prediction has no covariance to size a grid by, and a
   // turn that speeds up or slows down leaves it degrees off (the room's fast turn: 2-10 deg a
-  // frame): a frame that does not verify is given the search's starts from the last tracked
-  // frame (point features matched with it, image shifts) before it goes to a relocalization
-  // search. Not while the last pose is on probation (5a'): this frame must confirm it on its
-  // own, and the motion from it to a look-alike place's next view is as consistent as the
-  // truth's (the room started 0.87 m off: a pose 4.9 m off at 0.67, confirmed so at 0.68).
-  // With no gate to check them, its many starts' results are taken only when confidently
-  // verified, or when a feature start and the edges agree at the score a pose needs anyway
-  // (step 5: tracking's, or the confident one after a blind guess) (the room with a database, a jump of
-  // 3 m: an image shift's start converged 4 m and 78 deg off the truth, verified above tracking's
-  // score). And only within the local search's bound of the path from the last tracked pose to
-  // the prediction (every 3rd image of the room: an image shift's start converged on a look-alike
-  // 4.0 m away at 0.80, where the camera had moved 0.3 m).
-  // The starts need the last tracked frame within motion_search_max_gap_s, and run where the
-  // plain pose would not be taken: below tracking's score, or below the confident one after a
-  // blind guess (blind_guess: step 5's rules, below).
+  // frame): where the plain pose would not be taken (below tracking's score, or the confident one
+  // after a blind guess: step 5's rules) and the last tracked frame is recent, the frame is given
+  // the search's starts from that frame (point features matched with it, image shifts) before a
+  // relocalization search. With no gate to check them, a start's result is taken only when
+  // confidently verified (a feature start the edges agree with: at the score any pose needs; a
+  // 3 m jump in the room took an image shift's start 4 m and 78 deg off, verified above
+  // tracking's score), and only within the local search's bound of the path from the last
+  // tracked pose to the prediction (every 3rd image of the room: a look-alike 4.0 m away at 0.80,
+  // the camera having moved 0.3 m). Not while the last pose is on probation (5a'): this frame
+  // must confirm it on its own, and the motion from a look-alike's view to the next is as
+  // consistent as the truth's (the room started 0.87 m off: a pose 4.9 m off confirmed at 0.68).
   const bool can_search = m.database || m.localSearchInReach(t_ns);
   const bool blind_guess = prediction && !prediction->inertial &&
                            ((previous_t_ns && m.last_relocalized_t_ns == previous_t_ns) ||
                             (m.untracked > 0 && can_search && !T_world_camera_guess));
   bool confident_only = false;
   std::optional<Impl::LocalBound> search_bound;
-  if (!grid && !T_world_camera_guess && prediction && !prediction->inertial && !m.last_imu && m.tracked_since_reset &&
-      !m.start_on_probation && m.last_tracked_gray &&
+  if (!T_world_camera_guess && prediction && !prediction->inertial && !m.last_imu && m.tracked_since_reset &&
+      !m.start_on_probation && m.last_tracked_gray && m.last_tracked_gray->scene_depth_m > 0 &&
       static_cast<double>(t_ns - m.last_tracked_gray->t_ns) * 1e-9 <= m.options.motion_search_max_gap_s) {
     const double plain_score = track.state == TrackingState::kTracking ? scoreOf(track) : 0.0;
     if (plain_score < m.minTakenScore(prediction->velocity_unobserved || blind_guess)) {
-      const std::optional<SearchAnchor> anchor = m.searchAnchor();
-      if (anchor && anchor->scene_depth_m > 0) {
-        grid = m.startsGrid();
-        if (grid) incumbent_score = plain_score;
+      grid = m.startsGrid();
+      if (grid) {
+        incumbent_score = plain_score;
         confident_only = true;
-        search_bound = m.localBound(*anchor, guess, t_ns);
+        search_bound = m.localBound(*m.searchAnchor(), guess, t_ns);
       }
     }
   }
