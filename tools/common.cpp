@@ -198,6 +198,11 @@ void LocalizerArgs::add(CLI::App& app) {
                  "pose (on | off)")
       ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
+  app.add_option("--keyframe-edge-floor", keyframe_edge_floor,
+                 "Least gradient of a keyframe render's texture edge, gray levels per pixel (Sobel / 8): fainter "
+                 "texture a camera image does not show above its noise")
+      ->check(CLI::Range(0.0, 255.0))
+      ->capture_default_str();
   app.add_option("--backend", backend, "Live edges + alignment: auto | vulkan | cpu")
       ->check(CLI::IsMember({"auto", "vulkan", "cpu"}))
       ->capture_default_str();
@@ -221,6 +226,7 @@ void LocalizerArgs::apply(LocalizerOptions& options) const {
   options.rotation_prior_from_filter = rotation_prior == "filter";
   options.rotation_prior_covariance_scale = rotation_prior_scale;
   if (local_search == "off") options.relocalization.local_headings = 0;
+  options.reference.detector.min_high_gradient = keyframe_edge_floor;
 }
 
 std::vector<std::string> LocalizerArgs::arguments() const {
@@ -243,7 +249,9 @@ std::vector<std::string> LocalizerArgs::arguments() const {
           "--rotation-prior-scale",
           fmt::format("{:g}", rotation_prior_scale),
           "--local-search",
-          local_search};
+          local_search,
+          "--keyframe-edge-floor",
+          fmt::format("{:g}", keyframe_edge_floor)};
 }
 
 void DeviceArgs::add(CLI::App& app) {

@@ -98,6 +98,8 @@ struct LocalizerArgs {
   std::string rotation_prior = "filter";  ///< Attitude prior of the alignment: filter | off.
   double rotation_prior_scale = 1.0;      ///< Factor on that prior's covariance.
   std::string local_search = "on";        ///< Without a database, search keyframes rendered after a loss.
+  /// Keyframes' texture-edge floor, gray levels per pixel (ReferenceEdgeOptions::detector's min_high_gradient).
+  double keyframe_edge_floor = keyframeDetector().min_high_gradient;
   void add(CLI::App& app);
   /// Sets the options' backend, policy and keyframe threading; throws Failure on a bad value.
   void apply(LocalizerOptions& options) const;

@@ -11,12 +11,16 @@
 #                 here: room 0.3 m grid, city 8 m): relocalization on, and poses taken only when verified
 #   city_no_imu, room_no_imu  without the IMU (--no-imu, synchronous keyframes), from the first
 #                 ground-truth pose at no velocity: no frame lost, median translation <= 0.3 % of
-#                 the median scene depth and the largest error <= 2 % of it; the city whole, the
-#                 room's first 80 frames (from frame 86 its turn of ~190 deg/s needs the gyro: a
-#                 constant-velocity guess is degrees off; those frames are lost, not taken, since
-#                 a pose with no IMU needs the verification score); then the whole room, where
-#                 the turn is searched for among keyframes rendered around the last tracked pose:
-#                 at most 10 frames lost, the largest error <= 3 % of the depth
+#                 the median scene depth and the largest error <= 2 % of it (the room: 3 %); the
+#                 city whole, the room's first 80 frames (from frame 86 its turn of ~190 deg/s
+#                 needs the gyro: a constant-velocity guess is degrees off); then the whole room,
+#                 where the turn is found from the last tracked frame's starts or among keyframes
+#                 rendered around the last tracked pose: at most 3 frames lost, the largest error
+#                 <= 3 % of the depth. The room's largest errors without the IMU, from every 10th
+#                 frame at its true pose, are 0.3-5.4 cm (0.2-3.5 % of its 1.5 m) whatever the
+#                 keyframes' texture-edge floor (6, 9, 13 or 16): single frames of a plain wall
+#                 whose few edges fit a pose 1-2 deg off better than the true one, at whichever
+#                 frame a start meets them; from frame 0 that is frame 27 (3.6 cm at 1.43 deg)
 #   city_third, room_third  every third image (6.7 Hz; the city 3.75 m and up to 30 deg between
 #                 frames, the room 0.36 m and 20 deg), from the first ground-truth pose at no
 #                 velocity (synchronous keyframes): no frame lost or bridged by the IMU alone, no
@@ -208,6 +212,7 @@ elseif(CASE MATCHES "_no_imu$")
   file(REMOVE_RECURSE ${dir})
   set(max_ratio 0.02)
   if(scene STREQUAL "room")
+    set(max_ratio 0.03)
     set(frames_args --max-frames 80)
   else()
     set(frames_args "")
@@ -223,10 +228,10 @@ elseif(CASE MATCHES "_no_imu$")
                  "${scene_depth_median_m} m")
   check_run(${lost} 0 ${translation_median_m} ${translation_max_m} ${scene_depth_median_m} ${max_ratio} FALSE)
   if(scene STREQUAL "room")
-    # The whole room: its turn is searched for among keyframes rendered around the last tracked
-    # pose (no database): at most 10 frames lost (5 measured; 35 before the local search), none
-    # taken beyond 3 % of the depth (2.2 % measured: frame 96, tracked at a score of 0.16 in the
-    # turn, 3.7 cm off).
+    # The whole room: its turn is found from the last tracked frame's starts or searched for
+    # among keyframes rendered around the last tracked pose (no database): at most 3 frames lost
+    # (0 measured with the keyframes' texture-edge floor of 13, 5 with 6; 35 before the local
+    # search), none taken beyond 3 % of the depth (2.4 % measured: frame 27).
     run("track ${CASE} whole" ${VKLOC} track --sequence ${seq} --out ${dir}/whole.txt --report ${dir}/whole
         --keyframes sync --no-imu --quiet)
     foreach(key frames lost relocalized translation_median_m translation_max_m)
@@ -234,8 +239,8 @@ elseif(CASE MATCHES "_no_imu$")
     endforeach()
     message(STATUS "${CASE} whole: ${whole_frames} frames, lost ${whole_lost}, relocalized ${whole_relocalized}, "
                    "translation median ${whole_translation_median_m} m max ${whole_translation_max_m} m")
-    if(NOT whole_lost MATCHES "^[0-9]+$" OR whole_lost GREATER 10)
-      string(APPEND failures " whole room: lost ${whole_lost} > 10\n")
+    if(NOT whole_lost MATCHES "^[0-9]+$" OR whole_lost GREATER 3)
+      string(APPEND failures " whole room: lost ${whole_lost} > 3\n")
     endif()
     check_run(0 0 ${whole_translation_median_m} ${whole_translation_max_m} ${scene_depth_median_m} 0.03 FALSE)
   endif()

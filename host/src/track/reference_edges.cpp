@@ -16,7 +16,7 @@ namespace vkloc {
 EdgeDetectorOptions keyframeDetector() {
   EdgeDetectorOptions options;
   options.noise_sigmas = 0.0;
-  options.min_high_gradient = 6.0;
+  options.min_high_gradient = 13.0;
   return options;
 }
 

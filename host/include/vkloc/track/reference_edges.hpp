@@ -52,9 +52,11 @@ struct EdgePoint {
 static_assert(sizeof(EdgePoint) == 16, "EdgePoint must match a GLSL vec4");
 
 /// The edge detector of keyframe renders: a render has no sensor noise, so no noise floor;
-/// instead an absolute floor on the high threshold (gray levels per pixel, Sobel / 8: a step of
-/// twice that many gray levels) keeps the faint shading of nearly plain textures (painted
-/// walls, plaster) out of the keyframe: a camera image does not show it above its own noise.
+/// instead an absolute floor on the high threshold (13 gray levels per pixel, Sobel / 8: a step
+/// of 26 gray levels) keeps the faint shading of nearly plain textures (painted walls, plaster,
+/// wood grain) out of the keyframe: a camera image, under its own light, tone curve, blur and
+/// noise, does not show it reliably, and a keyframe point with no edge under it in the image
+/// pulls the alignment towards whatever edge lies nearest (README, "Tracker defaults").
 EdgeDetectorOptions keyframeDetector();
 
 /// How reference edges are taken from a rendered view.
