@@ -101,7 +101,8 @@ struct LocalizerArgs {
   /// Keyframes' texture-edge floor, gray levels per pixel (ReferenceEdgeOptions::detector's min_high_gradient).
   double keyframe_edge_floor = keyframeDetector().min_high_gradient;
   void add(CLI::App& app);
-  /// Sets the options' backend, policy and keyframe threading; throws Failure on a bad value.
+  /// Sets the options' backend, policy, keyframe threading, filter, search and keyframe edge floor; throws Failure
+  /// on a bad value.
   void apply(LocalizerOptions& options) const;
   /// The same as command-line arguments (to hand on to `vkloc track`).
   std::vector<std::string> arguments() const;

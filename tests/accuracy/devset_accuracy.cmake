@@ -17,7 +17,7 @@
 #                 where the turn is found from the last tracked frame's starts or among keyframes
 #                 rendered around the last tracked pose: at most 3 frames lost, the largest error
 #                 <= 3 % of the depth. The room's largest errors without the IMU, from every 10th
-#                 frame at its true pose, are 0.3-5.4 cm (0.2-3.5 % of its 1.5 m) whatever the
+#                 frame at its true pose, are 0.3-5.4 cm (0.2-3.6 % of its 1.5 m) whatever the
 #                 keyframes' texture-edge floor (6, 9, 13 or 16): single frames of a plain wall
 #                 whose few edges fit a pose 1-2 deg off better than the true one, at whichever
 #                 frame a start meets them; from frame 0 that is frame 27 (3.6 cm at 1.43 deg)
