@@ -30,13 +30,16 @@ summary() {
 trap summary EXIT
 # The asan stage's tests; a test one of whose processes LeakSanitizer's stop-the-world tracer
 # crashed in at exit ("Tracer caught signal 11", then "LeakSanitizer has encountered a fatal
-# error": a known sanitizer-runtime flake, google/sanitizers#1353, no leak report) is run once
+# error": a known sanitizer-runtime fault, google/sanitizers#1353, no leak report) is run once
 # more, if a GoogleTest test had passed before the crash (a command-line test stops at the
 # crashed command, so it has no such line). Any other failure, a sanitizer report in the same
-# output, or a second failure fails.
-asan_tests() {
+# output, or a failure of another kind fails. The fault is not always a flake: with some layouts
+# of the test binary the tracer reads a stale dynamic-TLS entry of the main thread ("DTLS ... at
+# 0x2e42-...") in every run of one test; a test whose second run crashes the same way is run a
+# third time with AddressSanitizer and UBSan alone (detect_leaks=0), since its leak check cannot
+# run at all, and must pass.
+asan_only_tracer_crashes() {
   local temporary=build/asan/Testing/Temporary name section
-  if ctest --preset asan -j "$(nproc)"; then return 0; fi
   [ -s "$temporary/LastTestsFailed.log" ] || return 1
   while IFS=: read -r _ name; do
     section=$(awk -v n="$name" '
@@ -50,9 +53,20 @@ asan_tests() {
       return 1
     fi
   done <"$temporary/LastTestsFailed.log"
-  echo "test.sh: LeakSanitizer's tracer crashed at a process's exit (a sanitizer-runtime flake):" \
+}
+asan_tests() {
+  if ctest --preset asan -j "$(nproc)"; then return 0; fi
+  asan_only_tracer_crashes || return 1
+  echo "test.sh: LeakSanitizer's tracer crashed at a process's exit (a sanitizer-runtime fault):" \
     "running them once more"
-  ctest --preset asan --rerun-failed --output-on-failure
+  if ctest --preset asan --rerun-failed --output-on-failure; then return 0; fi
+  asan_only_tracer_crashes || return 1
+  echo "test.sh: the tracer crashed again in the same tests, so their leak check cannot run:" \
+    "running them once more with AddressSanitizer and UBSan alone (detect_leaks=0):"
+  sed 's/^[0-9]*:/test.sh:   /' build/asan/Testing/Temporary/LastTestsFailed.log
+  ASAN_OPTIONS="detect_leaks=0 abort_on_error=1 strict_string_checks=1 detect_stack_use_after_return=1 check_initialization_order=1" \
+    UBSAN_OPTIONS="print_stacktrace=1 halt_on_error=1" \
+    ctest --test-dir build/asan --rerun-failed --output-on-failure
 }
 if [ "$(id -u)" -eq 0 ]; then
   stage "install dependencies"
