@@ -64,8 +64,12 @@ asan_tests() {
   echo "test.sh: the tracer crashed again in the same tests, so their leak check cannot run:" \
     "running them once more with AddressSanitizer and UBSan alone (detect_leaks=0):"
   sed 's/^[0-9]*:/test.sh:   /' build/asan/Testing/Temporary/LastTestsFailed.log
-  ASAN_OPTIONS="detect_leaks=0 abort_on_error=1 strict_string_checks=1 detect_stack_use_after_return=1 check_initialization_order=1" \
-    UBSAN_OPTIONS="print_stacktrace=1 halt_on_error=1" \
+  # The asan preset's own options (CMakePresets.json), leak detection off.
+  local asan_options ubsan_options
+  asan_options=$(sed -n 's/^ *"ASAN_OPTIONS": "\([^"]*\)".*/\1/p' CMakePresets.json)
+  ubsan_options=$(sed -n 's/^ *"UBSAN_OPTIONS": "\([^"]*\)".*/\1/p' CMakePresets.json)
+  [ -n "$asan_options" ] && [ -n "$ubsan_options" ] || return 1
+  ASAN_OPTIONS="${asan_options/detect_leaks=1/detect_leaks=0}" UBSAN_OPTIONS="$ubsan_options" \
     ctest --test-dir build/asan --rerun-failed --output-on-failure
 }
 if [ "$(id -u)" -eq 0 ]; then

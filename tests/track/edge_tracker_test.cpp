@@ -281,7 +281,10 @@ TEST(EdgeTracker, ConvergesOnTexturedBoxScene) {
 // faint checker aligns many of its points to nothing. The keyframes' texture-edge floor
 // (keyframeDetector: 13 gray levels per pixel, a step of 26) leaves it out of the keyframe.
 Texture faintTexture(int faint) {
-  Texture tex = test::makeBlockChecker(1, 128, 128, 128);
+  Texture tex;
+  tex.name = "faint";
+  tex.width = tex.height = 128;
+  tex.rgba.assign(static_cast<size_t>(tex.width) * tex.height * 4, 255);
   for (int y = 0; y < tex.height; ++y) {
     for (int x = 0; x < tex.width; ++x) {
       const bool strong = x < 6 || y < 6 || x >= 122 || y >= 122 || std::abs(x - 64) < 3 || std::abs(y - 64) < 3;
