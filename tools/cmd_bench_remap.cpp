@@ -364,6 +364,7 @@ void runRemapBench(const RemapBenchArgs& a) {
   stabilised.height = 360;
   stabilised.hfov_deg = 90;
   stabilised.pitch_deg = 45;
+  stabilised.dead_band_deg = 0;  // every frame turned: a new table each time
   stabilised.up_world = Eigen::Vector3d(0, 0, 1);
   stabilised.interpolation = RemapInterpolation::kBilinear;
   const LensCamera fisheye = fisheyeLens();

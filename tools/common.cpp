@@ -127,8 +127,8 @@ void ViewArgs::add(CLI::App& app) {
   app.add_option("--view-pitch", pitch_deg, "Stabilised view: axis angle below the horizon, degrees (90 = down)")
       ->capture_default_str();
   app.add_option("--view-dead-band", dead_band_deg,
-                 "Stabilised view: fixed to the lens while the compensation is at most this angle, degrees (0 = "
-                 "always compensated)")
+                 "Stabilised view: fixed to the lens while the compensation is at most this angle, degrees, and "
+                 "turned by the excess beyond (0 = every frame fully compensated)")
       ->check(CLI::Range(0.0, 90.0))
       ->capture_default_str();
   app.add_option("--view-flat-field", flat_field_sigma_px,

@@ -70,7 +70,7 @@ struct ViewArgs {
   std::string size;     ///< "WxH"; empty: the lens image's.
   double hfov_deg = 0;  ///< 0: a pinhole lens keeps its intrinsics, another gets 90.
   double pitch_deg = 45;
-  double dead_band_deg = 0;
+  double dead_band_deg = ViewOptions{}.dead_band_deg;
   double flat_field_sigma_px = 0;  ///< ViewOptions::flat_field_sigma_px.
   std::string interpolation = "bicubic";
   void add(CLI::App& app);

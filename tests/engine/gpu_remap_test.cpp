@@ -208,6 +208,7 @@ TEST_F(GpuRemapTest, CameraFrontOnTheDeviceFollowsItsTables) {
   view.height = 180;
   view.hfov_deg = 90;
   view.pitch_deg = 45;
+  view.dead_band_deg = 0;  // a new table every frame
   view.interpolation = RemapInterpolation::kBilinear;
   auto front = CameraFront::create(lens, view);
   ASSERT_TRUE(front.ok()) << front.error().message;
@@ -415,6 +416,7 @@ TEST_F(GpuRemapTest, CameraFrontBicubicOnTheDeviceFollowsItsTables) {
   view.height = 180;
   view.hfov_deg = 90;
   view.pitch_deg = 45;
+  view.dead_band_deg = 0;  // a new table every frame
   view.interpolation = RemapInterpolation::kBicubic;
   auto front = CameraFront::create(lens, view);
   ASSERT_TRUE(front.ok()) << front.error().message;

@@ -116,6 +116,7 @@ ViewOptions stabilisedThirtyDown() {
   o.width = 200;
   o.height = 150;
   o.pitch_deg = 30;
+  o.dead_band_deg = 0;  // every frame fully compensated
   return o;
 }
 
@@ -195,12 +196,40 @@ TEST(CameraFront, ADeadBandKeepsTheLensViewUntilTheCompensationExceedsIt) {
   EXPECT_FALSE(CameraFront::create(fisheyeLens(), o).ok());
 }
 
+TEST(CameraFront, AStabilisedViewInsideItsDeadBandIsTheUndistortedViewPixelForPixel) {
+  // The lens's own view through the stabilised path is the undistorted view's exact table, kept
+  // across frames whose view turned (not the grid's interpolation of it).
+  ViewOptions o = stabilisedThirtyDown();
+  o.dead_band_deg = 10;
+  auto banded = CameraFront::create(fisheyeLens(), o);
+  o.kind = ViewKind::kUndistorted;
+  o.dead_band_deg = 0;
+  auto undistorted = CameraFront::create(fisheyeLens(), o);
+  ASSERT_TRUE(banded.ok() && undistorted.ok());
+  const ImageU8 lens_image = randomImage(400, 400, 5);
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  ImageU8 expected, view;
+  ASSERT_TRUE((*undistorted)->remap(lens_image, I, expected).ok());
+  const Eigen::Matrix3d turned = Eigen::AngleAxisd(0.2, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
+  for (const Eigen::Matrix3d* R : {&I, &turned, &I, &turned, &I}) {
+    ASSERT_TRUE((*banded)->remap(lens_image, *R, view).ok());
+    const bool fixed = R == &I;
+    EXPECT_EQ(view.data == expected.data, fixed);
+    EXPECT_EQ((*banded)->validFraction() == (*undistorted)->validFraction(), fixed);
+    if (fixed) {
+      const RemapTable& t = (*banded)->table(I);
+      EXPECT_EQ(t.uv, (*banded)->exactTable(I).uv);
+    }
+  }
+}
+
 TEST(CameraFront, GridTableIsCloseToTheExactOne) {
   ViewOptions o;
   o.kind = ViewKind::kStabilised;
   o.width = 320;
   o.height = 240;
   o.pitch_deg = 20;
+  o.dead_band_deg = 0;
   auto front = CameraFront::create(fisheyeLens(), o);
   ASSERT_TRUE(front.ok());
   const Eigen::Matrix3d R = (*front)->viewRotation(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix() *
@@ -455,6 +484,7 @@ TEST(CameraFront, AStabilisedViewLiesOnARenderAtTheViewsPose) {
   view.width = 320;
   view.height = 240;
   view.hfov_deg = 80;
+  view.dead_band_deg = 0;
   view.interpolation = RemapInterpolation::kBilinear;
   auto renderer = CpuRenderer::create(test::makeBoxOnGround());
   auto rig = makeLensRig(fisheyeLens());
@@ -503,6 +533,7 @@ TEST(CameraFront, LocalizerTracksThroughAStabilisedFisheyeView) {
   view.height = 240;
   view.hfov_deg = 80;
   view.pitch_deg = 40;  // the scene's camera looks ~28 deg down: the view is turned 12 deg from it
+  view.dead_band_deg = 0;
   const LensRun run = trackThroughLens(fisheyeLens(), view, 8);
   EXPECT_EQ(run.tracked, 8);
   EXPECT_LT(run.max_error_m, 0.015);

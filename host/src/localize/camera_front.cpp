@@ -80,15 +80,15 @@ Result<std::unique_ptr<CameraFront>> CameraFront::create(const LensCamera& lens,
   }
   front->same_pixels_ = keep_intrinsics && lens.isIdealPinhole();
   if (front->same_pixels_) {
-    front->valid_fraction_ = 1.0;
+    front->slots_[kFixedSlot].valid_fraction = 1.0;
     return front;
   }
   // The view must mostly see through the lens, when their axes are aligned (a stabilised view
   // turns away from that as the camera does).
   (void)front->table(Eigen::Matrix3d::Identity());
-  if (front->valid_fraction_ < 0.5) {
+  if (front->validFraction() < 0.5) {
     return bad(fmt::format("only {:.0f} % of the {}x{} view (hfov {:.1f} deg) lies in the lens's field of view",
-                           100.0 * front->valid_fraction_, w, h,
+                           100.0 * front->validFraction(), w, h,
                            2.0 * std::atan(0.5 * w / front->view_.fx) * 180.0 / M_PI));
   }
   return front;
@@ -207,27 +207,34 @@ void CameraFront::fillGrid(const Eigen::Matrix3d& R_camera_view, int step, Remap
 }
 
 const RemapTable& CameraFront::table(const Eigen::Matrix3d& R_camera_view) {
-  if (table_valid_ && (options_.kind != ViewKind::kStabilised || R_camera_view == table_rotation_)) return table_;
-  const bool cached = options_.kind != ViewKind::kStabilised;
-  fillGrid(R_camera_view, cached ? 1 : options_.grid_step_px, table_);
-  table_rotation_ = R_camera_view;
-  table_valid_ = true;
+  const bool fixed = options_.kind != ViewKind::kStabilised || R_camera_view == Eigen::Matrix3d::Identity();
+  const int index = fixed ? kFixedSlot : kTurnedSlot;
+  Slot& slot = slots_[index];
+  if (index != current_) {
+    current_ = index;
+    remapper_stale_ = true;
+  }
+  if (slot.valid && (fixed || R_camera_view == slot.rotation)) return slot.table;
+  RemapTable& table = slot.table;
+  fillGrid(R_camera_view, fixed ? 1 : options_.grid_step_px, table);
+  slot.rotation = R_camera_view;
+  slot.valid = true;
   // Pixels without a source: 0 in the view (OpenCV replicates the border for taps that fall
   // outside the lens image, as the reference clamps them; a pixel with no source is zeroed).
-  no_source_.clear();
-  for (size_t i = 0; i < table_.uv.size(); i += 2) {
-    const float u = table_.uv[i], v = table_.uv[i + 1];
-    if (!(u >= 0 && v >= 0 && u <= static_cast<float>(table_.source_width - 1) &&
-          v <= static_cast<float>(table_.source_height - 1))) {
-      no_source_.push_back(static_cast<uint32_t>(i / 2));
+  slot.no_source.clear();
+  for (size_t i = 0; i < table.uv.size(); i += 2) {
+    const float u = table.uv[i], v = table.uv[i + 1];
+    if (!(u >= 0 && v >= 0 && u <= static_cast<float>(table.source_width - 1) &&
+          v <= static_cast<float>(table.source_height - 1))) {
+      slot.no_source.push_back(static_cast<uint32_t>(i / 2));
     }
   }
-  const size_t valid = table_.uv.size() / 2 - no_source_.size();
-  valid_fraction_ = table_.uv.empty() ? 0.0 : static_cast<double>(valid) / static_cast<double>(table_.uv.size() / 2);
-  maps_.reset();
+  const size_t valid = table.uv.size() / 2 - slot.no_source.size();
+  slot.valid_fraction = table.uv.empty() ? 0.0 : static_cast<double>(valid) / static_cast<double>(table.uv.size() / 2);
+  slot.maps.reset();
   remapper_stale_ = true;
-  if (cached && !remapper_) buildMaps();
-  return table_;
+  if (fixed && !remapper_) buildMaps(slot);
+  return table;
 }
 
 Status CameraFront::remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_camera_view, ImageU8& view_image) {
@@ -266,13 +273,14 @@ Status CameraFront::resample(const ImageU8& lens_image, const Eigen::Matrix3d& R
   const cv::Mat src(k.height, k.width, CV_8UC1, const_cast<uint8_t*>(lens_image.data.data()));
   cv::Mat dst(t.height, t.width, CV_8UC1, view_image.data.data());
   const int interpolation = options_.interpolation == RemapInterpolation::kBicubic ? cv::INTER_CUBIC : cv::INTER_LINEAR;
-  if (maps_) {
-    cv::remap(src, dst, maps_->xy, maps_->fraction, interpolation, cv::BORDER_REPLICATE);
+  const Slot& slot = current();
+  if (slot.maps) {
+    cv::remap(src, dst, slot.maps->xy, slot.maps->fraction, interpolation, cv::BORDER_REPLICATE);
   } else {
     const cv::Mat uv(t.height, t.width, CV_32FC2, const_cast<float*>(t.uv.data()));
     cv::remap(src, dst, uv, cv::Mat(), interpolation, cv::BORDER_REPLICATE);
   }
-  for (uint32_t i : no_source_) view_image.data[i] = 0;
+  for (uint32_t i : slot.no_source) view_image.data[i] = 0;
   return Status::success();
 }
 
@@ -283,7 +291,8 @@ void CameraFront::flatten(ImageU8& view_image) const {
   image.convertTo(value, CV_32F);
   cv::Mat weight(h, w, CV_32F, cv::Scalar(1.0f));
   float* weights = weight.ptr<float>();
-  for (uint32_t i : no_source_) weights[i] = 0.0f;
+  const std::vector<uint32_t>& no_source = current().no_source;
+  for (uint32_t i : no_source) weights[i] = 0.0f;
   // The local mean: a normalized convolution (sum of w I over sum of w, Gaussian weights) at
   // 1/k scale, k a power of two up to 8 that leaves sigma >= 2 of its pixels, then bilinear back.
   const double sigma = options_.flat_field_sigma_px;
@@ -306,20 +315,20 @@ void CameraFront::flatten(ImageU8& view_image) const {
   const float floor_value = static_cast<float>(std::max(1.0, 0.05 * mean));
   cv::Mat flat = value.mul(static_cast<float>(mean) / cv::max(local_full, floor_value));
   flat.convertTo(image, CV_8U);  // rounds and saturates into the view's own buffer
-  for (uint32_t i : no_source_) view_image.data[i] = 0;
+  for (uint32_t i : no_source) view_image.data[i] = 0;
 }
 
 void CameraFront::setRemapper(std::unique_ptr<ImageRemapper> remapper) {
   remapper_ = std::move(remapper);
   remapper_stale_ = true;
-  // Without a device the cached table needs its OpenCV maps again.
-  if (!remapper_ && table_valid_ && options_.kind != ViewKind::kStabilised) buildMaps();
+  // Without a device the kept table needs its OpenCV maps again.
+  if (!remapper_ && slots_[kFixedSlot].valid && !slots_[kFixedSlot].maps) buildMaps(slots_[kFixedSlot]);
 }
 
-void CameraFront::buildMaps() {
-  maps_ = std::make_unique<Maps>();
-  const cv::Mat uv(table_.height, table_.width, CV_32FC2, table_.uv.data());
-  cv::convertMaps(uv, cv::Mat(), maps_->xy, maps_->fraction, CV_16SC2);
+void CameraFront::buildMaps(Slot& slot) {
+  slot.maps = std::make_unique<Maps>();
+  const cv::Mat uv(slot.table.height, slot.table.width, CV_32FC2, slot.table.uv.data());
+  cv::convertMaps(uv, cv::Mat(), slot.maps->xy, slot.maps->fraction, CV_16SC2);
 }
 
 std::string CameraFront::remapDescription() const {

@@ -50,7 +50,14 @@ struct ViewOptions {
   /// roll) is at most this angle, and beyond it turns by only the excess about the same axis:
   /// the view's axis stays within the band of the stabilised direction. A lens mounted at
   /// pitch_deg on an airframe that tilts less than the band sees through its own centre.
-  double dead_band_deg = 0;
+  /// A view held still in the world keeps the edge alignment's valley (a turn about the view's
+  /// vertical axis traded for a shift across it) still in the world too, and the filter cannot
+  /// tell the two apart; a view that turns with the airframe, whose turns the gyro measures,
+  /// looks along that valley from ever other directions. The default is as accurate as the
+  /// lens's fixed central view on an airframe swinging within it, and keeps the axis within the
+  /// band of the stabilised direction where the airframe tilts further (README, "Lenses:
+  /// undistorted and stabilised views").
+  double dead_band_deg = 25;
   /// kStabilised: world direction against gravity (normalized on use).
   Eigen::Vector3d up_world{0, 0, 1};
   /// kStabilised: the remap table is computed exactly every grid_step_px view pixels and
@@ -88,8 +95,9 @@ class CameraFront {
 
   /// Exact remap table of the view turned by R_camera_view (every pixel projected).
   RemapTable exactTable(const Eigen::Matrix3d& R_camera_view) const;
-  /// The table in use for R_camera_view: cached (kUndistorted: built once, exact), else built
-  /// on the grid (grid_step_px) and interpolated.
+  /// The table in use for R_camera_view: the view fixed to the lens (kUndistorted, or a
+  /// stabilised view's identity rotation, which its dead band gives) exact, built once and kept;
+  /// any other rotation built on the grid (grid_step_px) and interpolated, kept until the next.
   const RemapTable& table(const Eigen::Matrix3d& R_camera_view);
 
   /// The view image seen by the lens image `lens_image` (1 channel, the lens's size) through
@@ -105,7 +113,7 @@ class CameraFront {
   std::string remapDescription() const;
 
   /// Fraction of the last table's pixels that have a source (0..1).
-  double validFraction() const { return valid_fraction_; }
+  double validFraction() const { return current().valid_fraction; }
 
   ~CameraFront();
 
@@ -113,25 +121,36 @@ class CameraFront {
   CameraFront() = default;
   void fillGrid(const Eigen::Matrix3d& R_camera_view, int step, RemapTable& table) const;
   bool sourceOf(const Eigen::Matrix3d& R_camera_view, double u, double v, float& su, float& sv) const;
-  void buildMaps();                         ///< maps_ from table_ (a cached table remapped by OpenCV).
   void flatten(ImageU8& view_image) const;  ///< ViewOptions::flat_field_sigma_px, in place.
   /// remap() without the size check and the flat field.
   Status resample(const ImageU8& lens_image, const Eigen::Matrix3d& R_camera_view, ImageU8& view_image);
+
+  struct Maps;
+  /// One remap table with what is derived from it.
+  struct Slot {
+    RemapTable table;
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Zero();
+    bool valid = false;
+    double valid_fraction = 0;
+    std::vector<uint32_t> no_source;  ///< View pixels without a source.
+    std::unique_ptr<Maps> maps;       ///< OpenCV's fixed-point form of a cached table.
+  };
+  void buildMaps(Slot& slot);  ///< slot.maps from slot.table (a cached table remapped by OpenCV).
+  const Slot& current() const { return slots_[current_]; }
 
   LensCamera lens_;
   PinholeCamera view_;
   ViewOptions options_;
   Eigen::Vector3d up_world_{0, 0, 1};
   bool same_pixels_ = false;  ///< The view's pixels are the lens image's (a flat field may follow).
-  RemapTable table_;
-  Eigen::Matrix3d table_rotation_ = Eigen::Matrix3d::Zero();
-  bool table_valid_ = false;
-  double valid_fraction_ = 0;
-  std::vector<uint32_t> no_source_;  ///< View pixels of table_ without a source.
-  struct Maps;
-  std::unique_ptr<Maps> maps_;  ///< OpenCV's fixed-point form of a cached table.
+  /// kFixedSlot: the view fixed to the lens (kUndistorted, or a stabilised view inside its dead
+  /// band), exact and kept; kTurnedSlot: a stabilised view turned from it, on the grid.
+  static constexpr int kFixedSlot = 0;
+  static constexpr int kTurnedSlot = 1;
+  Slot slots_[2];
+  int current_ = kFixedSlot;
   std::unique_ptr<ImageRemapper> remapper_;
-  bool remapper_stale_ = true;  ///< The device holds another table than table_.
+  bool remapper_stale_ = true;  ///< The device holds another table than the current one.
 };
 
 }  // namespace vkloc
