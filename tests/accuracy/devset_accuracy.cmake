@@ -31,6 +31,13 @@
 #                 1, where the image's shift is no guide and the motion search's grid is across
 #                 the view: the point features matched with frame 0 find it; before them it was
 #                 bridged and then lost on the CPU backend)
+#   city_sixth    every sixth image (3.3 Hz; the city 7.5 m and up to 60 deg between frames), the
+#                 same checks, starts at its images 0, 2, 5 and 8. The frame before is recent to
+#                 the motion search however slow the stream (LocalizerOptions::motion_search_max_gap_s):
+#                 before, its starts from the last tracked frame were left out past 0.25 s and
+#                 the second frame took a pose 12 m off (the run 59 m off at the median). The
+#                 room at that rate is not checked: its start at image 8 takes a look-alike 2.4 m
+#                 off at an unknown velocity (0.69 verified) and is lost.
 #   city_untextured, room_untextured  the whole sequence in the geometry-only model
 #                 (model/scene_untextured.obj), synchronous keyframes, from the first ground-truth
 #                 pose at no velocity: no frame lost, median translation <= 0.3 % of the median
@@ -44,7 +51,7 @@
 cmake_minimum_required(VERSION 3.22)
 include(${CMAKE_CURRENT_LIST_DIR}/../support/script_helpers.cmake)
 
-string(REGEX REPLACE "(_starts(_db)?|_no_imu|_third|_untextured)$" "" scene "${CASE}")
+string(REGEX REPLACE "(_starts(_db)?|_no_imu|_third|_sixth|_untextured)$" "" scene "${CASE}")
 set(seq ${DATA}/cycles-${scene})
 if(NOT EXISTS ${seq}/sequence.yaml)
   message(STATUS "skipped: no development sequence at ${seq}")
@@ -148,8 +155,15 @@ if(CASE MATCHES "_starts(_db)?$")
   track_starts(${seq} 20 "0;10;20;30;40;50;60;70;80;90;100" ${db_args})
   string(APPEND failures "${start_failures}")
   message(STATUS "${CASE}: ${passed} of ${count} starts tracked all 20 frames within 2 % of the depth")
-elseif(CASE MATCHES "_third$")
-  # A sequence folder of every third image: the same calibration, IMU, ground truth and model.
+elseif(CASE MATCHES "_(third|sixth)$")
+  # A sequence folder of every third (sixth) image: the same calibration, IMU, ground truth and model.
+  if(CASE MATCHES "_third$")
+    set(stride 3)
+    set(starts "0;3;6;9;12;15;18;21;24;27;30")
+  else()
+    set(stride 6)
+    set(starts "0;2;5;8")
+  endif()
   set(third ${WORK}/${CASE}_sequence)
   file(REMOVE_RECURSE ${third})
   file(MAKE_DIRECTORY ${third})
@@ -166,7 +180,7 @@ elseif(CASE MATCHES "_third$")
       string(APPEND kept "${line}\n")
       continue()
     endif()
-    math(EXPR r "${index} % 3")
+    math(EXPR r "${index} % ${stride}")
     if(r EQUAL 0)
       string(APPEND kept "${line}\n")
     endif()
@@ -175,7 +189,7 @@ elseif(CASE MATCHES "_third$")
   file(WRITE ${third}/images.txt "${kept}")
   track_whole(${third})
   check_run(${lost} ${inertial} ${translation_median_m} ${translation_max_m} ${scene_depth_median_m} 0.02 TRUE)
-  track_starts(${third} 10 "0;3;6;9;12;15;18;21;24;27;30")
+  track_starts(${third} 10 "${starts}")
   set(wanted ${count})
   message(STATUS "${CASE}: ${passed} of ${count} starts tracked all 10 frames within 2 % of the depth (wanted ${wanted})")
   if(passed LESS wanted)

@@ -365,6 +365,17 @@ struct Localizer::Impl {
   bool last_frame_waited = false;  ///< The last frame waited for a keyframe (its period is not counted).
   int64_t frame_interval_ns = 0;
 
+  /// Longest time (seconds) between two frames that still follow each other for the motion
+  /// search's starts from the last tracked frame and for the refusals counted in a row:
+  /// motion_search_max_gap_s, or 1.5 frame intervals of a slower stream (the frame before is
+  /// always recent: at 3 images a second the feature start was never tried, and a fast drone's
+  /// second frame, 7.5 m on, took a pose 12 m off), at most kLongestRecentGapS (a paused stream).
+  static constexpr double kLongestRecentGapS = 1.0;
+  double recentGapS() const {
+    const double interval_s = 1e-9 * static_cast<double>(frame_interval_ns);
+    return std::max(options.motion_search_max_gap_s, std::min(1.5 * interval_s, kLongestRecentGapS));
+  }
+
   bool worker() const { return options.keyframe_threading == KeyframeThreading::kWorkerThread; }
 
   /// Gives every backend the current keyframe's points when it changed.
@@ -635,8 +646,8 @@ struct Localizer::Impl {
       ++out.motion_search_probes;
       return r;
     };
-    const bool recent_frame = last_tracked_gray && static_cast<double>(out.t_ns - last_tracked_gray->t_ns) * 1e-9 <=
-                                                       options.motion_search_max_gap_s;
+    const bool recent_frame =
+        last_tracked_gray && static_cast<double>(out.t_ns - last_tracked_gray->t_ns) * 1e-9 <= recentGapS();
     // A start at the pose of point features matched with the last tracked frame (its depth
     // rendered at its pose): against a keyframe rendered there when it lies beyond a grid step.
     if (recent_frame && options.motion_search_feature_start) {
@@ -1824,7 +1835,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   std::optional<Impl::LocalBound> search_bound;
   if (!T_world_camera_guess && prediction && !prediction->inertial && !m.last_imu && m.tracked_since_reset &&
       !m.start_on_probation && m.last_tracked_gray && m.last_tracked_gray->scene_depth_m > 0 &&
-      static_cast<double>(t_ns - m.last_tracked_gray->t_ns) * 1e-9 <= m.options.motion_search_max_gap_s) {
+      static_cast<double>(t_ns - m.last_tracked_gray->t_ns) * 1e-9 <= m.recentGapS()) {
     const double plain_score = track.state == TrackingState::kTracking ? scoreOf(track) : 0.0;
     if (plain_score < m.minTakenScore(prediction->velocity_unobserved || blind_guess)) {
       grid = m.startsGrid();
@@ -1954,7 +1965,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   if (out.visual_rejected && refusalCountsAgainstPrior(out.verify_score, m.refusals.taken_scores, Impl::kTakenScores,
                                                        m.options.restart_min_score, m.options.verification.min_score)) {
     if (m.refusals.count > 0 && t_ns > m.refusals.t_ns &&
-        static_cast<double>(t_ns - m.refusals.t_ns) * 1e-9 <= m.options.motion_search_max_gap_s) {
+        static_cast<double>(t_ns - m.refusals.t_ns) * 1e-9 <= m.recentGapS()) {
       ++m.refusals.count;
     } else {
       m.refusals.count = 1;
@@ -1967,8 +1978,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   bool refused_too_long = false;
   if (out.visual_rejected) {
     Impl::RefusedStretch& s = m.refused_stretch;
-    if (!s.first_t_ns || t_ns <= s.last_t_ns ||
-        static_cast<double>(t_ns - s.last_t_ns) * 1e-9 > m.options.motion_search_max_gap_s) {
+    if (!s.first_t_ns || t_ns <= s.last_t_ns || static_cast<double>(t_ns - s.last_t_ns) * 1e-9 > m.recentGapS()) {
       s = {};
       s.first_t_ns = t_ns;
     }
@@ -1988,7 +1998,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // after refused): it restarts at that pose at an unknown velocity, as at a start.
   const bool velocity_refused =
       out.visual_rejected && m.restart_kept_velocity_t_ns && t_ns > *m.restart_kept_velocity_t_ns &&
-      static_cast<double>(t_ns - *m.restart_kept_velocity_t_ns) * 1e-9 <= m.options.motion_search_max_gap_s && verified;
+      static_cast<double>(t_ns - *m.restart_kept_velocity_t_ns) * 1e-9 <= m.recentGapS() && verified;
   if (velocity_refused) m.restart_kept_velocity_t_ns.reset();
   if (restart || refused_too_long || velocity_refused) {
     // The prior keeps its velocity, loosened (restart_sigma_velocity_m_s).

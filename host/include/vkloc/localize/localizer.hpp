@@ -298,7 +298,9 @@ struct LocalizerOptions {
   /// tracked frame points at (track/image_motion.hpp), when that frame is at most
   /// motion_search_max_gap_s old and the shift's phase correlation response is at least
   /// motion_search_min_response; a start more than a grid step from the current keyframe's pose
-  /// is aligned against a keyframe rendered at it.
+  /// is aligned against a keyframe rendered at it. In a stream slower than this the frame before
+  /// is recent whatever its age (1.5 frame intervals, at most 1 s), here and wherever frames
+  /// must follow each other (refusals in a row, a refused stretch).
   double motion_search_max_gap_s = 0.25;
   double motion_search_min_response = 0.1;
   /// First of all, the motion search aligns from the pose of ORB point features matched between
