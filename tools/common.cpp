@@ -114,7 +114,7 @@ PinholeCamera CameraArgs::get() const {
 void ViewArgs::add(CLI::App& app) {
   app.add_option("--view", view,
                  "Tracker view of a lens image: undistorted (fixed to the lens) | stabilised (EIS: roll and pitch "
-                 "compensated, axis --view-pitch below the horizon)")
+                 "compensated beyond --view-dead-band, axis --view-pitch below the horizon)")
       ->check(CLI::IsMember({"undistorted", "stabilised", "stabilized"}))
       ->capture_default_str();
   app.add_option("--view-interpolation", interpolation, "Sampling of the lens image: bicubic | bilinear")

@@ -8,7 +8,9 @@
 #                 frame (--view-dead-band 0) and through the fixed central crop of the same size:
 #                 both stabilised views lose no frame and keep their median error within 0.5 % of
 #                 the scene depth, and are bridged by the IMU alone in at most 5 % of the frames
-#                 (RELATIVE: the default one's median error is at most 10 % above the crop's).
+#                 (RELATIVE: the default one's median error is at most 10 % above the crop's; its
+#                 view never leaves the band on this drone, so that is the crop's own view; with
+#                 FULL the fully compensated view's, label open).
 #   fisheye_city_edge   the same drone and lens, seed 4, 300 frames: from frame ~104 the drone
 #                 flies along the city's edge and the view's upper half is plain ground; the filter
 #                 refuses the poses there and restarts (LocalizerOptions::restart_after_refused_s).
@@ -16,8 +18,9 @@
 #                 depth (a restart at rest, before the restart kept the filter's velocity, left
 #                 the stabilised view 44 frames lost and the crop 45 m off over 183 frames).
 #   fisheye_acro   the same lens on the acrobatic drone (twice the agile one's swings, up to 43 deg
-#                 and 4.4 rad/s, so the default view turns beyond its band; the fully compensated
-#                 view is checked too), seed 7, 100 frames: the crop's first alignments barely move
+#                 and 4.4 rad/s, so the default view turns beyond its band, and its median error
+#                 must be at most 10 % above the crop's; the fully compensated view is checked
+#                 too), seed 7, 100 frames: the crop's first alignments barely move
 #                 while the drone flies 6.7 m/s, the filter takes that velocity and refuses every
 #                 pose after; it restarts at a verified pose (not at one scoring 0.03 after poses
 #                 verified at 0.47) at an unknown velocity (the velocity it kept was the wrong
@@ -74,8 +77,14 @@ if(CASE STREQUAL "fisheye_eis")
           "${${label}_inertial} frames by the IMU alone (the crop ${crop_inertial})")
   endforeach()
   if(RELATIVE)
-    check(eis "${eis_translation_median_m} <= 1.1 * ${crop_translation_median_m}"
-          "median ${eis_translation_median_m} m > 1.1 x the crop's ${crop_translation_median_m} m")
+    # FULL: the view compensated every frame (label open: its median error is 3x the crop's here).
+    if(FULL)
+      set(compared full)
+    else()
+      set(compared eis)
+    endif()
+    check(${compared} "${${compared}_translation_median_m} <= 1.1 * ${crop_translation_median_m}"
+          "median ${${compared}_translation_median_m} m > 1.1 x the crop's ${crop_translation_median_m} m")
   endif()
 elseif(CASE MATCHES "^fisheye_(city_edge|acro)$")
   if(CASE STREQUAL "fisheye_city_edge")
@@ -101,6 +110,12 @@ elseif(CASE MATCHES "^fisheye_(city_edge|acro)$")
     check(${label} "${${label}_translation_median_m} <= 0.005 * ${${label}_scene_depth_median_m}"
           "median ${${label}_translation_median_m} m > 0.5 % of the depth")
   endforeach()
+  if(CASE STREQUAL "fisheye_acro")
+    # Here the default view turns beyond its band (67 of the 100 frames): the issue's comparison
+    # on a view that is not the crop.
+    check(eis "${eis_translation_median_m} <= 1.1 * ${crop_translation_median_m}"
+          "median ${eis_translation_median_m} m > 1.1 x the crop's ${crop_translation_median_m} m")
+  endif()
 elseif(CASE MATCHES "^radtan_(mild|euroc)$")
   set(k_mild "-0.1,0.01,1e-4,-1e-4,0")
   set(k_euroc "-0.28,0.074,2e-4,1.8e-5,0")

@@ -232,6 +232,18 @@ TEST_F(GpuRemapTest, CameraFrontOnTheDeviceFollowsItsTables) {
     const Agreement a = compare(out, *reference, (*front)->table(R));
     EXPECT_GE(a.within1, kMinFractionWithinTolerance) << "frame " << i;
   }
+  // The lens's own view (the kept exact table, as inside a dead band) and a turned one in turn:
+  // the device gets each frame's table back.
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d turned = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
+  for (const Eigen::Matrix3d* R : {&I, &turned, &I, &turned}) {
+    ImageU8 view_image;
+    ASSERT_TRUE((*front)->remap(source, *R, view_image).ok());
+    auto reference = remapBilinear(source, (*front)->table(*R));
+    ASSERT_TRUE(reference.ok());
+    const Agreement a = compare(view_image, *reference, (*front)->table(*R));
+    EXPECT_GE(a.within1, kMinFractionWithinTolerance) << (R == &I ? "the lens's view" : "turned");
+  }
   ImageU8 out;
   EXPECT_FALSE((*front)->remap(ImageU8(640, 480, 1), Eigen::Matrix3d::Identity(), out).ok());
 }

@@ -330,6 +330,31 @@ TEST(Localizer, AFarFrameAfterAnUnknownVelocityStartIsFoundFromPointFeatures) {
   EXPECT_EQ(results[1].motion_search_probes, 1);  // the feature start, first of the search
 }
 
+TEST(Localizer, InASlowStreamTheFrameBeforeIsRecentToTheMotionSearch) {
+  // A stream of one image every kSkip frames (0.95 s, slower than motion_search_max_gap_s) and
+  // the defaults: the second frame after a start at an unknown velocity gets the point features
+  // matched with the first as its first start, as at any frame rate (before, the frame before
+  // was too old for it, and the image shift's starts and the grid ended off).
+  constexpr int kSkip = 19;
+  const auto& images = test::localizeFrames(2 * kSkip + 1);
+  auto localizer = makeEkfLocalizer([](LocalizerOptions&) {});
+  ASSERT_TRUE(localizer);
+  localizer->reset(test::localizeTruth(0));
+  std::vector<LocalizationResult> results;
+  int64_t t_imu = 0;
+  for (int i : {0, kSkip, 2 * kSkip}) {
+    for (; t_imu <= i * kFrameNs; t_imu += 5'000'000) ASSERT_TRUE(localizer->addImu(circlingImuAt(t_imu)).ok());
+    auto r = localizer->localize(i * kFrameNs, images[static_cast<size_t>(i)]);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    results.push_back(*r);
+  }
+  EXPECT_EQ(results[1].state, TrackingState::kTracking);
+  EXPECT_LT(test::translationError(results[1].T_world_camera, test::localizeTruth(kSkip)), 3e-3);
+  EXPECT_EQ(results[1].motion_search_probes, 1);  // the feature start, first of the search
+  EXPECT_EQ(results[2].state, TrackingState::kTracking);
+  EXPECT_LT(test::translationError(results[2].T_world_camera, test::localizeTruth(2 * kSkip)), 3e-3);
+}
+
 TEST(Localizer, MotionSearchFeatureAgreementOutOfRangeIsRefused) {
   for (int k = 0; k < 6; ++k) {
     LocalizerOptions options;

@@ -214,10 +214,10 @@ const RemapTable& CameraFront::table(const Eigen::Matrix3d& R_camera_view) {
     current_ = index;
     remapper_stale_ = true;
   }
-  if (slot.valid && (fixed || R_camera_view == slot.rotation)) return slot.table;
+  if (slot.valid && (fixed || R_camera_view == slot.R_camera_view)) return slot.table;
   RemapTable& table = slot.table;
   fillGrid(R_camera_view, fixed ? 1 : options_.grid_step_px, table);
-  slot.rotation = R_camera_view;
+  slot.R_camera_view = R_camera_view;
   slot.valid = true;
   // Pixels without a source: 0 in the view (OpenCV replicates the border for taps that fall
   // outside the lens image, as the reference clamps them; a pixel with no source is zeroed).

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
@@ -365,15 +366,23 @@ struct Localizer::Impl {
   bool last_frame_waited = false;  ///< The last frame waited for a keyframe (its period is not counted).
   int64_t frame_interval_ns = 0;
 
+  /// The last kStreamIntervals frame intervals (ns, oldest first). Their least is the stream's
+  /// own interval: a pause in a stream is not its rate.
+  static constexpr size_t kStreamIntervals = 8;
+  std::deque<int64_t> stream_intervals_ns;
   /// Longest time (seconds) between two frames that still follow each other for the motion
   /// search's starts from the last tracked frame and for the refusals counted in a row:
-  /// motion_search_max_gap_s, or 1.5 frame intervals of a slower stream (the frame before is
-  /// always recent: at 3 images a second the feature start was never tried, and a fast drone's
-  /// second frame, 7.5 m on, took a pose 12 m off), at most kLongestRecentGapS (a paused stream).
+  /// motion_search_max_gap_s (0: none), or in a stream slower than that 1.5 of its intervals, at
+  /// most kLongestRecentGapS: the frame before is recent however slow the stream (else a start at
+  /// an unknown velocity gets no feature or image-shift start below 4 images a second; README,
+  /// "Slower streams").
   static constexpr double kLongestRecentGapS = 1.0;
   double recentGapS() const {
-    const double interval_s = 1e-9 * static_cast<double>(frame_interval_ns);
-    return std::max(options.motion_search_max_gap_s, std::min(1.5 * interval_s, kLongestRecentGapS));
+    if (!(options.motion_search_max_gap_s > 0)) return 0.0;
+    if (stream_intervals_ns.empty()) return options.motion_search_max_gap_s;
+    const int64_t interval_ns = *std::min_element(stream_intervals_ns.begin(), stream_intervals_ns.end());
+    return std::max(options.motion_search_max_gap_s,
+                    std::min(1.5e-9 * static_cast<double>(interval_ns), kLongestRecentGapS));
   }
 
   bool worker() const { return options.keyframe_threading == KeyframeThreading::kWorkerThread; }
@@ -1692,7 +1701,11 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     return makeError(ErrorCode::kInvalidArgument, "Localizer: no pose guess and no previous pose; call reset() first");
   }
   ++m.frame_index;
-  if (m.last_t_ns) m.frame_interval_ns = t_ns - *m.last_t_ns;
+  if (m.last_t_ns) {
+    m.frame_interval_ns = t_ns - *m.last_t_ns;
+    m.stream_intervals_ns.push_back(m.frame_interval_ns);
+    if (m.stream_intervals_ns.size() > Impl::kStreamIntervals) m.stream_intervals_ns.pop_front();
+  }
   if (!m.first_t_ns) m.first_t_ns = t_ns;
   if (m.worker()) {
     // Frames a second or more apart (a paused stream), and a frame that waited for a keyframe

@@ -1,8 +1,9 @@
 // vkloc: the camera front: turns the lens image into the pinhole view the tracker works in
 // (seed paper 000 sec. IV-B, eq. 8). Either an undistorted view fixed to the lens, or an
 // electronically stabilised view (EIS) whose optical axis keeps a chosen angle below the horizon
-// with roll and pitch compensated from the camera's attitude each frame; its heading follows the
-// camera's. The view shares the lens's optical centre: T_camera_view is a pure rotation.
+// with roll and pitch compensated from the camera's attitude each frame beyond a dead band (inside
+// it the view is the lens's own); its heading follows the camera's. The view shares the lens's optical centre:
+// T_camera_view is a pure rotation.
 //
 // Frames: camera = the physical lens (x right, y down, z forward); view = the virtual pinhole
 // camera; world as the model's, `up_world` against gravity.
@@ -24,7 +25,7 @@ namespace vkloc {
 
 enum class ViewKind {
   kUndistorted,  ///< Fixed to the lens, optical axes aligned (a pinhole lens: its own intrinsics).
-  kStabilised,   ///< EIS: axis at pitch_deg below the horizon, no roll, heading of the camera.
+  kStabilised,   ///< EIS: axis at pitch_deg below the horizon (within dead_band_deg), no roll, heading of the camera.
 };
 /// "undistorted", "stabilised".
 const char* viewKindName(ViewKind kind);
@@ -50,13 +51,10 @@ struct ViewOptions {
   /// roll) is at most this angle, and beyond it turns by only the excess about the same axis:
   /// the view's axis stays within the band of the stabilised direction. A lens mounted at
   /// pitch_deg on an airframe that tilts less than the band sees through its own centre.
-  /// A view held still in the world keeps the edge alignment's valley (a turn about the view's
-  /// vertical axis traded for a shift across it) still in the world too, and the filter cannot
-  /// tell the two apart; a view that turns with the airframe, whose turns the gyro measures,
-  /// looks along that valley from ever other directions. The default is as accurate as the
-  /// lens's fixed central view on an airframe swinging within it, and keeps the axis within the
-  /// band of the stabilised direction where the airframe tilts further (README, "Lenses:
-  /// undistorted and stabilised views").
+  /// A view held still in the world holds the edge alignment's valley (a turn about the view's
+  /// vertical axis traded for a shift across it) still in the world, where the filter cannot
+  /// tell the two apart; a view that turns with the airframe, whose turns the gyro measures, sees
+  /// that valley from changing directions (README, "Lenses: undistorted and stabilised views").
   double dead_band_deg = 25;
   /// kStabilised: world direction against gravity (normalized on use).
   Eigen::Vector3d up_world{0, 0, 1};
@@ -71,7 +69,7 @@ struct ViewOptions {
   double flat_field_sigma_px = 0;
 };
 
-/// Lens image -> view image. Not thread-safe (it caches the last table).
+/// Lens image -> view image. Not thread-safe (it caches two tables: the lens's own view, a turned one).
 class CameraFront {
  public:
   /// kInvalidArgument for an invalid lens (validateLensCamera) or options out of range, or a
@@ -129,7 +127,7 @@ class CameraFront {
   /// One remap table with what is derived from it.
   struct Slot {
     RemapTable table;
-    Eigen::Matrix3d rotation = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d R_camera_view = Eigen::Matrix3d::Zero();
     bool valid = false;
     double valid_fraction = 0;
     std::vector<uint32_t> no_source;  ///< View pixels without a source.

@@ -298,13 +298,15 @@ struct LocalizerOptions {
   /// tracked frame points at (track/image_motion.hpp), when that frame is at most
   /// motion_search_max_gap_s old and the shift's phase correlation response is at least
   /// motion_search_min_response; a start more than a grid step from the current keyframe's pose
-  /// is aligned against a keyframe rendered at it. In a stream slower than this the frame before
-  /// is recent whatever its age (1.5 frame intervals, at most 1 s), here and wherever frames
-  /// must follow each other (refusals in a row, a refused stretch).
+  /// is aligned against a keyframe rendered at it. In a stream slower than this (its interval:
+  /// the least of its last 8 frame intervals, so a pause does not count) the bound is 1.5 of its
+  /// intervals, at most 1 s: the frame before is recent. The same bound ("recent") holds wherever
+  /// frames must follow each other: the feature start below, refusals in a row, a refused
+  /// stretch, a kept velocity's check (0 = no frame is recent).
   double motion_search_max_gap_s = 0.25;
   double motion_search_min_response = 0.1;
   /// First of all, the motion search aligns from the pose of ORB point features matched between
-  /// the last tracked frame (within motion_search_max_gap_s) and this one, lifted to 3D by a
+  /// the last tracked frame (when recent, see motion_search_max_gap_s) and this one, lifted to 3D by a
   /// depth render at the last tracked pose (featurePose with relocalization.features). Two
   /// camera images match where a render and an image do not (blur, light), and the pose needs
   /// no guess of the motion: a start at an unknown velocity, a frame rate too low for the
@@ -345,15 +347,16 @@ struct LocalizerOptions {
   /// while the velocity is unobserved (0..1; a value at or below motion_search_confident_score
   /// gives the rule before this option: search below the confident score, stop at it).
   double motion_search_start_score = 0.8;
-  /// Restart of the motion prior: after this many poses in a row (at most motion_search_max_gap_s
-  /// apart) that the prior's gate refused although their verification score was at least
+  /// Restart of the motion prior: after this many poses in a row (each recent to the one before,
+  /// see motion_search_max_gap_s) that the prior's gate refused although their verification score was at least
   /// restart_min_score, or at least verification.min_score and above the scores of each of the
   /// last five poses the prior took (refusalCountsAgainstPrior), the prior restarts at the last of
   /// them (Localizer result prior_restarted; its velocity: restart_sigma_velocity_m_s). 0 = never.
   int restart_after_refusals = 2;
   double restart_min_score = 0.5;
   /// Restart of the motion prior whatever the scores: after the prior's gate has refused every
-  /// tracked pose for this long (seconds; poses at most motion_search_max_gap_s apart; a pose
+  /// tracked pose for this long (seconds; each pose recent to the one before, see
+  /// motion_search_max_gap_s: in a stream of 3 images a second two poses make 0.3 s; a pose
   /// refused only because a restarted prior takes verified poses alone does not count), it
   /// restarts at the last one (prior_restarted); where one of the stretch's poses verified
   /// (verification.min_score), at the first verified one from then on. A prior that refuses
