@@ -214,11 +214,10 @@ const RemapTable& CameraFront::table(const Eigen::Matrix3d& R_camera_view) {
     current_ = index;
     remapper_stale_ = true;
   }
-  if (slot.valid && (fixed || R_camera_view == slot.R_camera_view)) return slot.table;
+  if (!slot.table.uv.empty() && (fixed || R_camera_view == slot.R_camera_view)) return slot.table;
   RemapTable& table = slot.table;
   fillGrid(R_camera_view, fixed ? 1 : options_.grid_step_px, table);
   slot.R_camera_view = R_camera_view;
-  slot.valid = true;
   // Pixels without a source: 0 in the view (OpenCV replicates the border for taps that fall
   // outside the lens image, as the reference clamps them; a pixel with no source is zeroed).
   slot.no_source.clear();
@@ -322,7 +321,7 @@ void CameraFront::setRemapper(std::unique_ptr<ImageRemapper> remapper) {
   remapper_ = std::move(remapper);
   remapper_stale_ = true;
   // Without a device the kept table needs its OpenCV maps again.
-  if (!remapper_ && slots_[kFixedSlot].valid && !slots_[kFixedSlot].maps) buildMaps(slots_[kFixedSlot]);
+  if (!remapper_ && !slots_[kFixedSlot].table.uv.empty() && !slots_[kFixedSlot].maps) buildMaps(slots_[kFixedSlot]);
 }
 
 void CameraFront::buildMaps(Slot& slot) {

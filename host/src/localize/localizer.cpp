@@ -384,6 +384,10 @@ struct Localizer::Impl {
     return std::max(options.motion_search_max_gap_s,
                     std::min(1.5e-9 * static_cast<double>(interval_ns), kLongestRecentGapS));
   }
+  /// Whether a frame at earlier_t_ns is recent to one at t_ns (recentGapS).
+  bool recent(int64_t t_ns, int64_t earlier_t_ns) const {
+    return static_cast<double>(t_ns - earlier_t_ns) * 1e-9 <= recentGapS();
+  }
 
   bool worker() const { return options.keyframe_threading == KeyframeThreading::kWorkerThread; }
 
@@ -655,8 +659,7 @@ struct Localizer::Impl {
       ++out.motion_search_probes;
       return r;
     };
-    const bool recent_frame =
-        last_tracked_gray && static_cast<double>(out.t_ns - last_tracked_gray->t_ns) * 1e-9 <= recentGapS();
+    const bool recent_frame = last_tracked_gray && recent(out.t_ns, last_tracked_gray->t_ns);
     // A start at the pose of point features matched with the last tracked frame (its depth
     // rendered at its pose): against a keyframe rendered there when it lies beyond a grid step.
     if (recent_frame && options.motion_search_feature_start) {
@@ -1848,7 +1851,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   std::optional<Impl::LocalBound> search_bound;
   if (!T_world_camera_guess && prediction && !prediction->inertial && !m.last_imu && m.tracked_since_reset &&
       !m.start_on_probation && m.last_tracked_gray && m.last_tracked_gray->scene_depth_m > 0 &&
-      static_cast<double>(t_ns - m.last_tracked_gray->t_ns) * 1e-9 <= m.recentGapS()) {
+      m.recent(t_ns, m.last_tracked_gray->t_ns)) {
     const double plain_score = track.state == TrackingState::kTracking ? scoreOf(track) : 0.0;
     if (plain_score < m.minTakenScore(prediction->velocity_unobserved || blind_guess)) {
       grid = m.startsGrid();
@@ -1977,8 +1980,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   bool restart = false;
   if (out.visual_rejected && refusalCountsAgainstPrior(out.verify_score, m.refusals.taken_scores, Impl::kTakenScores,
                                                        m.options.restart_min_score, m.options.verification.min_score)) {
-    if (m.refusals.count > 0 && t_ns > m.refusals.t_ns &&
-        static_cast<double>(t_ns - m.refusals.t_ns) * 1e-9 <= m.recentGapS()) {
+    if (m.refusals.count > 0 && t_ns > m.refusals.t_ns && m.recent(t_ns, m.refusals.t_ns)) {
       ++m.refusals.count;
     } else {
       m.refusals.count = 1;
@@ -1991,7 +1993,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   bool refused_too_long = false;
   if (out.visual_rejected) {
     Impl::RefusedStretch& s = m.refused_stretch;
-    if (!s.first_t_ns || t_ns <= s.last_t_ns || static_cast<double>(t_ns - s.last_t_ns) * 1e-9 > m.recentGapS()) {
+    if (!s.first_t_ns || t_ns <= s.last_t_ns || !m.recent(t_ns, s.last_t_ns)) {
       s = {};
       s.first_t_ns = t_ns;
     }
@@ -2009,9 +2011,9 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // A prior restarted with its velocity that refuses the next verified pose has the velocity
   // wrong (a fast drone's start whose first alignments barely moved: 1 m/s for 6.7, every pose
   // after refused): it restarts at that pose at an unknown velocity, as at a start.
-  const bool velocity_refused =
-      out.visual_rejected && m.restart_kept_velocity_t_ns && t_ns > *m.restart_kept_velocity_t_ns &&
-      static_cast<double>(t_ns - *m.restart_kept_velocity_t_ns) * 1e-9 <= m.recentGapS() && verified;
+  const bool velocity_refused = out.visual_rejected && m.restart_kept_velocity_t_ns &&
+                                t_ns > *m.restart_kept_velocity_t_ns && m.recent(t_ns, *m.restart_kept_velocity_t_ns) &&
+                                verified;
   if (velocity_refused) m.restart_kept_velocity_t_ns.reset();
   if (restart || refused_too_long || velocity_refused) {
     // The prior keeps its velocity, loosened (restart_sigma_velocity_m_s).

@@ -124,11 +124,10 @@ class CameraFront {
   Status resample(const ImageU8& lens_image, const Eigen::Matrix3d& R_camera_view, ImageU8& view_image);
 
   struct Maps;
-  /// One remap table with what is derived from it.
+  /// One remap table with what is derived from it (none built yet while the table is empty).
   struct Slot {
     RemapTable table;
     Eigen::Matrix3d R_camera_view = Eigen::Matrix3d::Zero();
-    bool valid = false;
     double valid_fraction = 0;
     std::vector<uint32_t> no_source;  ///< View pixels without a source.
     std::unique_ptr<Maps> maps;       ///< OpenCV's fixed-point form of a cached table.
