@@ -1,5 +1,5 @@
-// Tests of the reference remaps (core/remap.hpp): bilinear and bicubic, and bicubic against
-// OpenCV's INTER_CUBIC.
+// Tests of the reference remaps (core/remap.hpp): bilinear and bicubic, bicubic against OpenCV's
+// INTER_CUBIC, and the fixed-point bicubic fast path against the reference.
 #include "vkloc/core/remap.hpp"
 
 #include <gtest/gtest.h>
@@ -329,28 +329,32 @@ ImageU8 smoothImage(int w, int h, unsigned seed) {
   return out;
 }
 
-TEST(RemapBicubic, AgreesWithOpenCvInterCubicReplicate) {
-  // OpenCV's INTER_CUBIC (same kernel, a = -0.75) with BORDER_REPLICATE and a float map, as the
-  // camera front's CPU path uses it: positions quantised to 1/32 px and fixed-point weights, so
-  // not bit-exact; the pixels without a source (0 in the reference, replicated border in
-  // OpenCV, zeroed by the camera front) are left out.
-  constexpr int kW = 320, kH = 240;
-  const ImageU8 source = smoothImage(kW, kH, 3);
-  RemapTable table{kW, kH, kW, kH, {}};
-  table.uv.resize(2 * static_cast<size_t>(kW) * kH);
+/// A rotation and zoom about the centre with a radial term, w x h from a source of the same size:
+/// positions off the pixel grid, some of them off the source.
+RemapTable turnedTable(int w, int h) {
+  RemapTable table{w, h, w, h, {}};
+  table.uv.resize(2 * static_cast<size_t>(w) * h);
   const double angle = 0.21, scale = 0.93;
-  for (int y = 0; y < kH; ++y) {
-    for (int x = 0; x < kW; ++x) {
-      // A rotation and zoom about the centre with a radial term: positions off the pixel grid,
-      // some of them off the source.
-      const double dx = x - 0.5 * (kW - 1), dy = y - 0.5 * (kH - 1);
-      const double r2 = (dx * dx + dy * dy) / (kW * kW), k = scale * (1 + 0.15 * r2);
-      const size_t i = static_cast<size_t>(y) * kW + x;
-      table.uv[2 * i] = static_cast<float>(0.5 * (kW - 1) + k * (std::cos(angle) * dx - std::sin(angle) * dy) + 0.3);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const double dx = x - 0.5 * (w - 1), dy = y - 0.5 * (h - 1);
+      const double r2 = (dx * dx + dy * dy) / (w * w), k = scale * (1 + 0.15 * r2);
+      const size_t i = static_cast<size_t>(y) * w + x;
+      table.uv[2 * i] = static_cast<float>(0.5 * (w - 1) + k * (std::cos(angle) * dx - std::sin(angle) * dy) + 0.3);
       table.uv[2 * i + 1] =
-          static_cast<float>(0.5 * (kH - 1) + k * (std::sin(angle) * dx + std::cos(angle) * dy) - 0.45);
+          static_cast<float>(0.5 * (h - 1) + k * (std::sin(angle) * dx + std::cos(angle) * dy) - 0.45);
     }
   }
+  return table;
+}
+
+TEST(RemapBicubic, AgreesWithOpenCvInterCubicReplicate) {
+  // OpenCV's INTER_CUBIC (same kernel, a = -0.75) with BORDER_REPLICATE and a float map:
+  // positions quantised to 1/32 px and fixed-point weights, so not bit-exact; the pixels without
+  // a source (0 in the reference, replicated border in OpenCV) are left out.
+  constexpr int kW = 320, kH = 240;
+  const ImageU8 source = smoothImage(kW, kH, 3);
+  RemapTable table = turnedTable(kW, kH);
   auto reference = remapBicubic(source, table);
   ASSERT_TRUE(reference.ok()) << reference.error().message;
   const cv::Mat src(kH, kW, CV_8UC1, const_cast<uint8_t*>(source.data.data()));
@@ -384,6 +388,138 @@ TEST(RemapBicubic, AgreesWithOpenCvInterCubicReplicate) {
   EXPECT_GT(no_source, 0u);
   EXPECT_GE(within1 / n, 0.99);
   EXPECT_LE(max_diff, 6);
+}
+
+/// Counts of the pixels of `a` against `b`: equal, within 1 gray level, and the largest difference.
+struct Difference {
+  size_t equal = 0, within1 = 0, count = 0;
+  int max_diff = 0;
+};
+Difference difference(const ImageU8& a, const ImageU8& b) {
+  Difference d;
+  d.count = a.data.size();
+  for (size_t i = 0; i < a.data.size(); ++i) {
+    const int diff = std::abs(static_cast<int>(a.data[i]) - static_cast<int>(b.data[i]));
+    d.equal += diff == 0;
+    d.within1 += diff <= 1;
+    d.max_diff = std::max(d.max_diff, diff);
+  }
+  return d;
+}
+
+/// Hard edges: a checkerboard of 7-pixel cells at gray levels 20 and 235 with seeded noise.
+ImageU8 edgeImage(int w, int h, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> noise(-6, 6);
+  ImageU8 image(w, h, 1);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const int cell = ((x / 7) + (y / 7)) % 2 == 0 ? 20 : 235;
+      image.at(x, y) = static_cast<uint8_t>(std::clamp(cell + noise(rng), 0, 255));
+    }
+  }
+  return image;
+}
+
+TEST(RemapBicubicFixed, IsTheReferenceAtPositionsRoundedTo1Over32Pixel) {
+  // At positions on the 1/32 px grid the fast path differs from the reference only by its
+  // 14-bit weights (16 taps x 1/32768 x 255: about 0.12 gray level), so by at most 1 on every
+  // pixel, hard edges too. Off the grid it rounds a position by up to 1/64 px: on a smooth image
+  // within 1 gray level nearly everywhere; at a hard edge (215 gray levels over a pixel, a slope
+  // of about 270 per pixel after the kernel's overshoot) that is up to 4-5 gray levels.
+  constexpr int kW = 320, kH = 240;
+  const RemapTable table = turnedTable(kW, kH);
+  RemapTable rounded = table;
+  for (float& p : rounded.uv) p = std::floor(p * 32.0f + 0.5f) / 32.0f;
+  for (const bool hard : {false, true}) {
+    const ImageU8 source = hard ? edgeImage(kW, kH, 5) : smoothImage(kW, kH, 3);
+    for (const bool on_grid : {true, false}) {
+      const RemapTable& t = on_grid ? rounded : table;
+      auto reference = remapBicubic(source, t);
+      auto fast = remapBicubicFixed(source, t);
+      ASSERT_TRUE(reference.ok() && fast.ok());
+      const Difference d = difference(*fast, *reference);
+      const double n = static_cast<double>(d.count);
+      std::printf(
+          "[ remap ] fixed-point bicubic vs the reference, %s image, positions %s: equal %.3f %%, within 1 "
+          "%.3f %%, max %d\n",
+          hard ? "hard-edged" : "smooth", on_grid ? "on the 1/32 px grid" : "as they are", 100.0 * d.equal / n,
+          100.0 * d.within1 / n, d.max_diff);
+      if (on_grid) {
+        EXPECT_LE(d.max_diff, 1);
+        EXPECT_GE(d.equal / n, 0.99);
+      } else if (!hard) {
+        EXPECT_GE(d.within1 / n, 0.999);
+        EXPECT_LE(d.max_diff, 2);
+      } else {
+        EXPECT_LE(d.max_diff, 6);
+      }
+    }
+  }
+}
+
+TEST(RemapBicubicFixed, EveryKernelGivesTheSameImageAndRowsMayBeSplit) {
+  // SIMD (AVX2 or SSE2, whichever the processor takes) and one pixel at a time, over odd sizes
+  // whose rows end in a partial block, with positions on, near and off the border.
+  for (const auto& [w, h] : {std::pair{37, 23}, std::pair{64, 48}, std::pair{13, 5}}) {
+    const ImageU8 source = edgeImage(w, h, 11);
+    RemapTable table = turnedTable(w, h);
+    table.uv[0] = std::numeric_limits<float>::quiet_NaN();
+    table.uv[3] = std::numeric_limits<float>::infinity();
+    auto simd = remapBicubicFixed(source, table, true);
+    auto scalar = remapBicubicFixed(source, table, false);
+    ASSERT_TRUE(simd.ok() && scalar.ok());
+    EXPECT_EQ(simd->data, scalar->data) << w << "x" << h;
+    ImageU8 split(w, h, 1);
+    for (int row = 0; row < h; row += 3) {
+      remapBicubicFixedRows(source.data.data(), table, split.data.data(), row, std::min(h, row + 3));
+    }
+    EXPECT_EQ(split.data, simd->data) << w << "x" << h;
+  }
+}
+
+TEST(RemapBicubicFixed, ConstantsWholePixelsAndPixelsWithoutASourceAreExact) {
+  // Weights that sum to exactly 1 keep a constant image constant; at whole pixels the kernel is
+  // (0, 1, 0, 0) and the fast path equals the reference; positions off the source, NaN and
+  // infinities give 0; taps off the source replicate the border as the reference's do.
+  ImageU8 flat(20, 16, 1);
+  std::fill(flat.data.begin(), flat.data.end(), uint8_t{201});
+  auto flat_out = remapBicubicFixed(flat, turnedTable(20, 16));
+  ASSERT_TRUE(flat_out.ok());
+  const RemapTable turned = turnedTable(20, 16);
+  for (size_t i = 0; i < flat_out->data.size(); ++i) {
+    const float u = turned.uv[2 * i], v = turned.uv[2 * i + 1];
+    const bool on_source = u >= 0.0f && u <= 19.0f && v >= 0.0f && v <= 15.0f;
+    EXPECT_EQ(flat_out->data[i], on_source ? 201 : 0) << i;
+  }
+  const ImageU8 source = edgeImage(37, 23, 2);
+  for (const float du : {0.0f, 2.0f, -1.0f}) {
+    const RemapTable shifted = shiftTable(37, 23, 37, 23, du, du > 0 ? 1.0f : 0.0f);
+    auto reference = remapBicubic(source, shifted);
+    for (const bool simd : {true, false}) {
+      auto fast = remapBicubicFixed(source, shifted, simd);
+      ASSERT_TRUE(reference.ok() && fast.ok());
+      EXPECT_EQ(fast->data, reference->data) << du << " simd " << simd;
+    }
+  }
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<float> uv = {-0.01f, 3.0f, 7.01f, 2.0f, nan, 1.0f, inf, 1.0f, 3.0f, -inf, 0.0f, 0.0f, 7.0f, 5.0f};
+  const ImageU8 ramp = rampImage(8, 6);
+  auto reference = remapBicubic(ramp, pointsTable(8, 6, uv));
+  auto fast = remapBicubicFixed(ramp, pointsTable(8, 6, uv));
+  ASSERT_TRUE(reference.ok() && fast.ok());
+  EXPECT_EQ(fast->data, reference->data);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(fast->data[static_cast<size_t>(i)], 0) << i;
+}
+
+TEST(RemapBicubicFixed, SizeMismatchesAreErrors) {
+  const ImageU8 source = rampImage(8, 6);
+  RemapTable table = shiftTable(4, 3, 8, 6, 0.0f, 0.0f);
+  table.uv.pop_back();
+  EXPECT_FALSE(remapBicubicFixed(source, table).ok());
+  auto wrong = remapBicubicFixed(rampImage(7, 6), shiftTable(4, 3, 8, 6, 0.0f, 0.0f));
+  ASSERT_FALSE(wrong.ok());
+  EXPECT_NE(wrong.error().message.find("remapBicubicFixed"), std::string::npos) << wrong.error().message;
 }
 
 }  // namespace

@@ -232,7 +232,7 @@ const RemapTable& CameraFront::table(const Eigen::Matrix3d& R_camera_view) {
   slot.valid_fraction = table.uv.empty() ? 0.0 : static_cast<double>(valid) / static_cast<double>(table.uv.size() / 2);
   slot.maps.reset();
   remapper_stale_ = true;
-  if (fixed && !remapper_) buildMaps(slot);
+  if (fixed && !remapper_ && options_.interpolation == RemapInterpolation::kBilinear) buildMaps(slot);
   return table;
 }
 
@@ -269,15 +269,26 @@ Status CameraFront::resample(const ImageU8& lens_image, const Eigen::Matrix3d& R
     view_image = std::move(out).value();
     return Status::success();
   }
+  const Slot& slot = current();
+  if (options_.interpolation == RemapInterpolation::kBicubic) {
+    // The fixed-point bicubic path (remapBicubicFixedRows) on OpenCV's threads, in stripes of
+    // rows; it reads the float table itself (no maps to build for a table made this frame) and
+    // zeroes the pixels without a source.
+    const int stripes = std::max(1, std::min(t.height / 16, 4 * cv::getNumThreads()));
+    cv::parallel_for_(cv::Range(0, stripes), [&](const cv::Range& r) {
+      const int begin = static_cast<int>(static_cast<int64_t>(t.height) * r.start / stripes);
+      const int end = static_cast<int>(static_cast<int64_t>(t.height) * r.end / stripes);
+      remapBicubicFixedRows(lens_image.data.data(), t, view_image.data.data(), begin, end);
+    });
+    return Status::success();
+  }
   const cv::Mat src(k.height, k.width, CV_8UC1, const_cast<uint8_t*>(lens_image.data.data()));
   cv::Mat dst(t.height, t.width, CV_8UC1, view_image.data.data());
-  const int interpolation = options_.interpolation == RemapInterpolation::kBicubic ? cv::INTER_CUBIC : cv::INTER_LINEAR;
-  const Slot& slot = current();
   if (slot.maps) {
-    cv::remap(src, dst, slot.maps->xy, slot.maps->fraction, interpolation, cv::BORDER_REPLICATE);
+    cv::remap(src, dst, slot.maps->xy, slot.maps->fraction, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
   } else {
     const cv::Mat uv(t.height, t.width, CV_32FC2, const_cast<float*>(t.uv.data()));
-    cv::remap(src, dst, uv, cv::Mat(), interpolation, cv::BORDER_REPLICATE);
+    cv::remap(src, dst, uv, cv::Mat(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
   }
   for (uint32_t i : slot.no_source) view_image.data[i] = 0;
   return Status::success();
@@ -321,7 +332,10 @@ void CameraFront::setRemapper(std::unique_ptr<ImageRemapper> remapper) {
   remapper_ = std::move(remapper);
   remapper_stale_ = true;
   // Without a device the kept table needs its OpenCV maps again.
-  if (!remapper_ && !slots_[kFixedSlot].table.uv.empty() && !slots_[kFixedSlot].maps) buildMaps(slots_[kFixedSlot]);
+  if (!remapper_ && options_.interpolation == RemapInterpolation::kBilinear && !slots_[kFixedSlot].table.uv.empty() &&
+      !slots_[kFixedSlot].maps) {
+    buildMaps(slots_[kFixedSlot]);
+  }
 }
 
 void CameraFront::buildMaps(Slot& slot) {
@@ -331,7 +345,9 @@ void CameraFront::buildMaps(Slot& slot) {
 }
 
 std::string CameraFront::remapDescription() const {
-  return remapper_ ? remapper_->describe() : std::string("OpenCV remap (CPU)");
+  if (remapper_) return remapper_->describe();
+  return options_.interpolation == RemapInterpolation::kBicubic ? std::string("fixed-point bicubic remap (CPU)")
+                                                                : std::string("OpenCV remap (CPU)");
 }
 
 }  // namespace vkloc

@@ -99,15 +99,16 @@ class CameraFront {
   const RemapTable& table(const Eigen::Matrix3d& R_camera_view);
 
   /// The view image seen by the lens image `lens_image` (1 channel, the lens's size) through
-  /// table(R_camera_view) with the options' interpolation (OpenCV remap, positions in 1/32 px;
-  /// remapBilinear / remapBicubic are its reference), or on the device remapper when given.
+  /// table(R_camera_view) with the options' interpolation on the CPU (bilinear: OpenCV's remap;
+  /// bicubic: remapBicubicFixedRows on OpenCV's threads; both with positions in 1/32 px, and
+  /// remapBilinear / remapBicubic their references), or on the device remapper when given.
   /// kInvalidArgument for an image of another size or channel count.
   Status remap(const ImageU8& lens_image, const Eigen::Matrix3d& R_camera_view, ImageU8& view_image);
 
   /// Remaps on a device from now on (null: on the CPU again), e.g. Accelerator::createRemapper
   /// of the first table. The device's errors come back from remap().
   void setRemapper(std::unique_ptr<ImageRemapper> remapper);
-  /// "OpenCV remap (CPU)" or the device remapper's description.
+  /// "OpenCV remap (CPU)", "fixed-point bicubic remap (CPU)" or the device remapper's description.
   std::string remapDescription() const;
 
   /// Fraction of the last table's pixels that have a source (0..1).
@@ -130,9 +131,9 @@ class CameraFront {
     Eigen::Matrix3d R_camera_view = Eigen::Matrix3d::Zero();
     double valid_fraction = 0;
     std::vector<uint32_t> no_source;  ///< View pixels without a source.
-    std::unique_ptr<Maps> maps;       ///< OpenCV's fixed-point form of a cached table.
+    std::unique_ptr<Maps> maps;       ///< OpenCV's fixed-point form of a cached table (bilinear).
   };
-  void buildMaps(Slot& slot);  ///< slot.maps from slot.table (a cached table remapped by OpenCV).
+  void buildMaps(Slot& slot);  ///< slot.maps from slot.table (a cached table OpenCV remaps bilinearly).
   const Slot& current() const { return slots_[current_]; }
 
   LensCamera lens_;
