@@ -109,6 +109,40 @@ TEST(CameraFront, OpenCvRemapMatchesTheReference) {
   EXPECT_GT((*front)->validFraction(), 0.99);
 }
 
+TEST(CameraFront, BicubicRemapIsTheFixedPointPathOnEveryRowAndZeroesPixelsWithoutASource) {
+  // The default interpolation on the CPU: remapBicubicFixedRows over stripes of rows on OpenCV's
+  // threads, equal pixel for pixel to the one-thread remapBicubicFixed of the same table, for views
+  // of few rows too (fewer than a stripe's 16); pixels without a source are 0.
+  for (const int height : {7, 17, 150}) {
+    ViewOptions o;
+    o.kind = ViewKind::kStabilised;
+    o.width = 200;
+    o.height = height;
+    o.hfov_deg = 110;  // the 120-deg lens's field ends inside the view's corners: pixels without a source
+    o.dead_band_deg = 0;
+    auto front = CameraFront::create(fisheyeLens(), o);
+    ASSERT_TRUE(front.ok()) << front.error().message;
+    const ImageU8 img = randomImage(400, 400, 5);
+    const Eigen::Matrix3d R = (*front)->viewRotation(Eigen::Matrix3d::Identity());
+    ImageU8 view;
+    ASSERT_TRUE((*front)->remap(img, R, view).ok());
+    const RemapTable& table = (*front)->table(R);
+    auto expected = remapBicubicFixed(img, table);
+    ASSERT_TRUE(expected.ok());
+    EXPECT_EQ(view.data, expected->data) << height;
+    size_t without_source = 0;
+    for (size_t i = 0; i < view.data.size(); ++i) {
+      const float u = table.uv[2 * i], v = table.uv[2 * i + 1];
+      if (!(u >= 0 && v >= 0 && u <= static_cast<float>(table.source_width - 1) &&
+            v <= static_cast<float>(table.source_height - 1))) {
+        ++without_source;
+        EXPECT_EQ(view.data[i], 0) << i;
+      }
+    }
+    EXPECT_GT(without_source, 0u) << height;
+  }
+}
+
 /// A 200x150 stabilised view with its axis 30 deg below the horizon.
 ViewOptions stabilisedThirtyDown() {
   ViewOptions o;

@@ -9,6 +9,10 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define VKLOC_REMAP_AVX2 1
+#include <immintrin.h>
+#endif
 
 #include "vkloc/core/text.hpp"
 
@@ -171,7 +175,7 @@ constexpr int kWeightBits = 14;  ///< Weights in 1/16384.
 /// (fy * kFractions + fx), products of remapBicubic's cubicWeights in kWeightBits fixed point,
 /// their sum made exactly 1 << kWeightBits by the largest one.
 struct BicubicWeights {
-  alignas(16) int16_t w[kFractions * kFractions][16];
+  alignas(32) int16_t w[kFractions * kFractions][16];  // a row per 256-bit load
   BicubicWeights() {
     float wx[kFractions][4];
     for (int f = 0; f < kFractions; ++f) cubicWeights(static_cast<float>(f) / kFractions, wx[f]);
@@ -253,15 +257,19 @@ inline __m128i bicubicFixedPartial(const uint8_t* p, size_t stride, const int16_
 #endif
 
 /// remapBicubicFixedRows's loop on the target's baseline: four pixels at a time with SSE2 (where
-/// `simd` and the target has it), else one at a time.
+/// `sse2` and the target has it), else one at a time.
 void bicubicFixedRows(const uint8_t* source, const RemapTable& table, uint8_t* out, int row_begin, int row_end,
-                      bool simd) {
-  const BicubicWeights& weights = bicubicWeights();
+                      bool sse2) {
   const int sw = table.source_width, sh = table.source_height;
+  const auto one = [&](float u, float v) { return bicubicFixedPixel(source, sw, sh, u, v); };
+#if defined(__SSE2__)
+  const BicubicWeights& weights = bicubicWeights();
   // Inside these bounds all 16 taps lie on the source (bicubicFixedPixel).
   const float max_u = static_cast<float>(sw - 3), max_v = static_cast<float>(sh - 3);
   const size_t stride = static_cast<size_t>(sw);
-  const auto one = [&](float u, float v) { return bicubicFixedPixel(source, sw, sh, u, v); };
+#else
+  (void)sse2;
+#endif
   for (int y = row_begin; y < row_end; ++y) {
     const size_t first = static_cast<size_t>(y) * static_cast<size_t>(table.width);
     const float* uv = table.uv.data() + 2 * first;
@@ -275,7 +283,7 @@ void bicubicFixedRows(const uint8_t* source, const RemapTable& table, uint8_t* o
     const __m128 scale = _mm_set1_ps(static_cast<float>(kFractions)), half = _mm_set1_ps(0.5f);
     const __m128i fraction_mask = _mm_set1_epi32(kFractions - 1);
     const __m128i rounding = _mm_set1_epi32(1 << (kWeightBits - 1));
-    for (; simd && x + 4 <= table.width; x += 4) {
+    for (; sse2 && x + 4 <= table.width; x += 4) {
       const __m128 a = _mm_loadu_ps(uv + 2 * x), b = _mm_loadu_ps(uv + 2 * x + 4);
       const __m128 u = _mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
       const __m128 v = _mm_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
@@ -308,17 +316,12 @@ void bicubicFixedRows(const uint8_t* source, const RemapTable& table, uint8_t* o
       const int32_t bytes = _mm_cvtsi128_si32(_mm_packus_epi16(words, words));
       std::memcpy(dst + x, &bytes, 4);
     }
-#else
-    (void)simd;
 #endif
     for (; x < table.width; ++x) dst[x] = one(uv[2 * x], uv[2 * x + 1]);
   }
 }
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define VKLOC_REMAP_AVX2 1
-#include <immintrin.h>
-
+#if defined(VKLOC_REMAP_AVX2)
 /// bicubicFixedRows with AVX2 (chosen at run time where the processor has it): eight pixels at a
 /// time, each pixel's 16 taps widened and weighted in one 256-bit register; the same integer
 /// operations, so the same outputs.
@@ -393,22 +396,33 @@ __attribute__((target("avx2"))) void bicubicFixedRowsAvx2(const uint8_t* source,
 
 }  // namespace
 
-void remapBicubicFixedRows(const uint8_t* source, const RemapTable& table, uint8_t* out, int row_begin, int row_end,
-                           bool simd) {
+namespace {
+
+bool hasAvx2() {
 #if defined(VKLOC_REMAP_AVX2)
   static const bool avx2 = __builtin_cpu_supports("avx2");
-  if (simd && avx2) {
+  return avx2;
+#else
+  return false;
+#endif
+}
+
+}  // namespace
+
+void remapBicubicFixedRows(const uint8_t* source, const RemapTable& table, uint8_t* out, int row_begin, int row_end,
+                           FixedRemapKernel kernel) {
+#if defined(VKLOC_REMAP_AVX2)
+  if (kernel == FixedRemapKernel::kFastest && hasAvx2()) {
     bicubicFixedRowsAvx2(source, table, out, row_begin, row_end);
     return;
   }
 #endif
-  bicubicFixedRows(source, table, out, row_begin, row_end, simd);
+  bicubicFixedRows(source, table, out, row_begin, row_end, kernel != FixedRemapKernel::kScalar);
 }
 
-const char* remapBicubicFixedKernel() {
-#if defined(VKLOC_REMAP_AVX2)
-  if (__builtin_cpu_supports("avx2")) return "AVX2";
-#endif
+const char* remapBicubicFixedKernel(FixedRemapKernel kernel) {
+  if (kernel == FixedRemapKernel::kScalar) return "scalar";
+  if (kernel == FixedRemapKernel::kFastest && hasAvx2()) return "AVX2";
 #if defined(__SSE2__)
   return "SSE2";
 #else
@@ -416,11 +430,11 @@ const char* remapBicubicFixedKernel() {
 #endif
 }
 
-Result<ImageU8> remapBicubicFixed(const ImageU8& source, const RemapTable& table, bool simd) {
+Result<ImageU8> remapBicubicFixed(const ImageU8& source, const RemapTable& table, FixedRemapKernel kernel) {
   VKLOC_TRY_STATUS(validateRemapTable(table));
   VKLOC_TRY_STATUS(checkSource("remapBicubicFixed", source, table));
   ImageU8 out(table.width, table.height, 1);
-  remapBicubicFixedRows(source.data.data(), table, out.data.data(), 0, table.height, simd);
+  remapBicubicFixedRows(source.data.data(), table, out.data.data(), 0, table.height, kernel);
   return out;
 }
 

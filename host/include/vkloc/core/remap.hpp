@@ -67,26 +67,30 @@ Result<ImageU8> remapBilinear(const ImageU8& source, const RemapTable& table);
 /// GpuRemap (engine) computes the same operations. Errors as remapBilinear's.
 Result<ImageU8> remapBicubic(const ImageU8& source, const RemapTable& table);
 
+/// Which kernel remapBicubicFixedRows runs: the fastest the processor has (AVX2, eight pixels at
+/// a time, chosen at run time; else SSE2, four at a time, on x86-64), SSE2 (on x86-64; elsewhere
+/// scalar), or one pixel at a time. The integer operations are the same, so are the outputs.
+enum class FixedRemapKernel { kFastest, kSse2, kScalar };
+
 /// The CPU fast path of remapBicubic: each position rounded to 1/32 px (floor(32 u + 1/2), as
 /// OpenCV's fixed-point maps), the 16 weights of each of the 32 x 32 fractions the products of
 /// remapBicubic's W in 14-bit fixed point, made to sum to exactly 1 (a constant image stays
 /// constant), integer sums, output clamp((sum + 2^13) >> 14, 0, 255); taps off the source
 /// replicate the border and pixels without a source get 0 (remapBicubic's rules). Within 1 gray
 /// level of remapBicubic on most pixels: the rounding moves a position by up to 1/64 px, a few
-/// gray levels at a hard edge; equal to it where positions are whole pixels. `simd`: eight pixels
-/// at a time with AVX2 where the processor has it (chosen at run time), four with SSE2 on other
-/// x86-64 processors; false: one at a time. The integer operations are the same, so are the
-/// outputs. Computes output rows [row_begin, row_end) of `out` (table.width x table.height bytes),
-/// so that callers can split the rows over threads. Unchecked: the caller validated the table
+/// gray levels at a hard edge; within 1 on every pixel where positions lie on the 1/32 px grid.
+/// Computes output rows [row_begin, row_end) of `out` (table.width x table.height bytes), so that
+/// callers can split the rows over threads. Unchecked: the caller validated the table
 /// (validateRemapTable) and `source` is a table.source_width x table.source_height image.
 void remapBicubicFixedRows(const uint8_t* source, const RemapTable& table, uint8_t* out, int row_begin, int row_end,
-                           bool simd = true);
+                           FixedRemapKernel kernel = FixedRemapKernel::kFastest);
 
-/// The kernel remapBicubicFixedRows runs with `simd` on this processor: "AVX2", "SSE2" or "scalar".
-const char* remapBicubicFixedKernel();
+/// The kernel `kernel` is on this processor: "AVX2", "SSE2" or "scalar".
+const char* remapBicubicFixedKernel(FixedRemapKernel kernel = FixedRemapKernel::kFastest);
 
 /// remapBicubicFixedRows over the whole table, on one thread; errors as remapBicubic's.
-Result<ImageU8> remapBicubicFixed(const ImageU8& source, const RemapTable& table, bool simd = true);
+Result<ImageU8> remapBicubicFixed(const ImageU8& source, const RemapTable& table,
+                                  FixedRemapKernel kernel = FixedRemapKernel::kFastest);
 
 /// remapBilinear or remapBicubic, as `interpolation` says.
 Result<ImageU8> remapImage(const ImageU8& source, const RemapTable& table, RemapInterpolation interpolation);
