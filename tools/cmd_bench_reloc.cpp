@@ -40,6 +40,7 @@ struct RelocBenchArgs {
   double retrieval_deg = 30.0;  ///< ... and this of the query.
   int candidates = RelocalizationOptions{}.candidates;
   int refined = RelocalizationOptions{}.refined_probes;
+  int realign_level = RelocalizationOptions{}.realign_level;
   int rerank = RelocalizationOptions{}.rerank_candidates;
   double rerank_bits_weight = RelocalizationOptions{}.rerank_bits_weight;
   bool top_first = RelocalizationOptions{}.top_candidate_first;
@@ -84,6 +85,7 @@ std::unique_ptr<Localizer> makeLocalizer(const Setup& s, const RelocBenchArgs& a
   setSequenceInertial(s.seq, imu, options);
   options.relocalization.candidates = a.candidates;
   options.relocalization.refined_probes = a.refined;
+  options.relocalization.realign_level = a.realign_level;
   options.relocalization.rerank_candidates = a.rerank;
   options.relocalization.rerank_bits_weight = a.rerank_bits_weight;
   options.relocalization.top_candidate_first = a.top_first;
@@ -478,6 +480,12 @@ void addRelocBench(CLI::App& bench) {
       ->capture_default_str();
   reloc->add_option("--refined", args->refined, "Probed starts aligned fully per search")
       ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  reloc
+      ->add_option("--realign-level", args->realign_level,
+                   "A refined pose verified below the search's score is aligned again from itself from this pyramid "
+                   "level; the better verified is kept (-1: never)")
+      ->check(CLI::Range(-1, 7))
       ->capture_default_str();
   reloc->add_option("--keyframes", args->keyframes, "Keyframe threading: sync | worker")->capture_default_str();
   reloc->add_option("--trials", args->trials, "Forced-loss or start trials (0: none)")

@@ -1128,14 +1128,19 @@ TEST(Relocalization, TheReRankingPutsAKeyframesOwnViewFirst) {
 
 TEST(Relocalization, APoseThatAlignmentsFromTwoKeyframesReachNeedsNoHighScore) {
   // No pose can reach a score of 1 alone: without agreement nothing is found; with it, the
-  // searches find true poses (where two candidates' alignments meet) and nothing wrong.
-  int found_alone = 0, found_agreeing = 0;
-  for (int agreeing : {0, 2}) {
+  // searches find true poses (where two candidates' alignments meet) and nothing wrong. Every
+  // refined pose then scores below min_score and is aligned again from a deeper level
+  // (realign_level): the better verified of the two is kept, so no pose found verifies lower
+  // than without that second alignment, and none is found that was not.
+  int found_alone = 0, found_agreeing = 0, found_without_realign = 0;
+  std::map<int, double> score_without_realign;
+  for (const auto& [agreeing, realign_level] : {std::pair{0, 2}, std::pair{2, -1}, std::pair{2, 2}}) {
     LocalizerOptions options;
     options.keyframe_threading = KeyframeThreading::kSynchronous;
     options.relocalization.min_score = 1.0;
     options.relocalization.confident_score = 1.0;
     options.relocalization.agreeing_candidates = agreeing;
+    options.relocalization.realign_level = realign_level;
     auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
     ASSERT_TRUE(created.ok()) << created.error().message;
     ASSERT_TRUE((*created)->setKeyframeDatabase(asymmetricDatabase()).ok());
@@ -1146,11 +1151,22 @@ TEST(Relocalization, APoseThatAlignmentsFromTwoKeyframesReachNeedsNoHighScore) {
       if (r->state != TrackingState::kRelocalized) continue;
       EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i)), 0.04) << i;
       EXPECT_LT(r->verify_score, 1.0);
-      ++(agreeing == 0 ? found_alone : found_agreeing);
+      if (agreeing == 0) {
+        ++found_alone;
+      } else if (realign_level < 0) {
+        ++found_without_realign;
+        score_without_realign[i] = r->verify_score;
+      } else {
+        ++found_agreeing;
+        if (score_without_realign.count(i)) {
+          EXPECT_GE(r->verify_score, score_without_realign[i] - 1e-9) << i;
+        }
+      }
     }
   }
   EXPECT_EQ(found_alone, 0);
   EXPECT_GE(found_agreeing, 4) << "of 8";
+  EXPECT_GE(found_agreeing, found_without_realign);
 }
 
 TEST(Relocalization, DatabaseAndSearchErrors) {

@@ -95,7 +95,7 @@ Status validateOptions(const LocalizerOptions& o) {
       !finiteIn(l.confident_score, 0.0, 1.0) || !finiteIn(l.min_response, 0.0, 1.0) || l.agreeing_candidates < 0 ||
       l.agreeing_candidates > 100 || l.agreement_probes < 0 || l.agreement_probes > 100 ||
       !finiteIn(l.agree_depth_fraction, 0.0, 1.0) || !finiteIn(l.agree_deg, 0.0, 180.0) ||
-      !finiteIn(l.rerank_bits_weight, 0.0, 1.0)) {
+      !finiteIn(l.rerank_bits_weight, 0.0, 1.0) || l.realign_level < -1 || l.realign_level > 7) {
     return makeError(
         ErrorCode::kInvalidArgument,
         "Localizer: relocalization needs candidates and refined_probes in 1..100, rerank_candidates in "
@@ -103,7 +103,7 @@ Status validateOptions(const LocalizerOptions& o) {
         "depth_step in 0..1, after_untracked_frames >= 0, refinements "
         "in 0..10, shift_starts in 0..5, radii and growth >= 0, min_contrast in 0..255 and scores and "
         "min_response in 0..1, agreeing_candidates and agreement_probes in 0..100, agree_depth_fraction in "
-        "0..1, agree_deg in 0..180 and rerank_bits_weight in 0..1");
+        "0..1, agree_deg in 0..180, rerank_bits_weight in 0..1 and realign_level in -1..7");
   }
   if (l.local_headings < 0 || l.local_headings > 360 || l.local_tilts_deg.size() > 16 ||
       !std::all_of(l.local_tilts_deg.begin(), l.local_tilts_deg.end(),
@@ -1169,8 +1169,35 @@ struct Localizer::Impl {
         if (!again.ok()) return again.error();
         track = std::move(again).value();
       }
-      const double score =
+      double score =
           verificationScore(verificationFeatures(track, keyframes->current()->scene_depth_m), options.verification);
+      if (o.realign_level >= 0 && track.state == TrackingState::kTracking && score < o.min_score) {
+        // Verified below min_score: once more from itself from a deeper level (realign_level),
+        // then against a keyframe rendered at that result; the better verified pose is kept.
+        const std::shared_ptr<const Keyframe> kept = keyframes->current();
+        Result<TrackResult> wide = alignAt(track.T_world_camera, std::min(o.realign_level, deepest));
+        if (!wide.ok()) return wide.error();
+        std::optional<TrackResult> again;
+        if (wide->state == TrackingState::kTracking && isValidPose(wide->T_world_camera)) {
+          request.T_world_ref = wide->T_world_camera;
+          VKLOC_TRY_STATUS(keyframes->makeNow(request, out.render_ms, out.reference_ms));
+          VKLOC_TRY_STATUS(uploadKeyframe());
+          Result<TrackResult> fine = alignAt(wide->T_world_camera, 0);
+          if (!fine.ok()) return fine.error();
+          if (fine->state == TrackingState::kTracking) again = std::move(fine).value();
+        }
+        const double again_score =
+            again ? verificationScore(verificationFeatures(*again, keyframes->current()->scene_depth_m),
+                                      options.verification)
+                  : 0.0;
+        if (again && again_score > score) {
+          track = std::move(*again);
+          score = again_score;
+        } else if (keyframes->current() != kept) {
+          keyframes->restore(kept);
+          VKLOC_TRY_STATUS(uploadKeyframe());
+        }
+      }
       const Eigen::Vector3d& position = track.T_world_camera.translation();
       const bool inside =
           local ? local->holds(position)
