@@ -394,10 +394,6 @@ __attribute__((target("avx2"))) void bicubicFixedRowsAvx2(const uint8_t* source,
 }
 #endif
 
-}  // namespace
-
-namespace {
-
 bool hasAvx2() {
 #if defined(VKLOC_REMAP_AVX2)
   static const bool avx2 = __builtin_cpu_supports("avx2");

@@ -1155,6 +1155,13 @@ struct Localizer::Impl {
     };
     request.keep_gray = false;
     request.keep_depth = false;
+    // The frame aligned from `T` against a keyframe rendered at `T` (a refinement).
+    auto alignAgainstRenderAt = [&](const Pose& T) -> Result<TrackResult> {
+      request.T_world_ref = T;
+      VKLOC_TRY_STATUS(keyframes->makeNow(request, out.render_ms, out.reference_ms));
+      VKLOC_TRY_STATUS(uploadKeyframe());
+      return alignAt(T, 0);
+    };
     auto refine = [&](const Probe& p) -> Status {
       keyframes->restore(p.keyframe);
       VKLOC_TRY_STATUS(uploadKeyframe());
@@ -1162,10 +1169,7 @@ struct Localizer::Impl {
       if (!r.ok()) return r.error();
       TrackResult track = std::move(r).value();
       for (int k = 0; k < o.refinements && isValidPose(track.T_world_camera); ++k) {
-        request.T_world_ref = track.T_world_camera;
-        VKLOC_TRY_STATUS(keyframes->makeNow(request, out.render_ms, out.reference_ms));
-        VKLOC_TRY_STATUS(uploadKeyframe());
-        Result<TrackResult> again = alignAt(track.T_world_camera, 0);
+        Result<TrackResult> again = alignAgainstRenderAt(track.T_world_camera);
         if (!again.ok()) return again.error();
         track = std::move(again).value();
       }
@@ -1179,10 +1183,7 @@ struct Localizer::Impl {
         if (!wide.ok()) return wide.error();
         std::optional<TrackResult> again;
         if (wide->state == TrackingState::kTracking && isValidPose(wide->T_world_camera)) {
-          request.T_world_ref = wide->T_world_camera;
-          VKLOC_TRY_STATUS(keyframes->makeNow(request, out.render_ms, out.reference_ms));
-          VKLOC_TRY_STATUS(uploadKeyframe());
-          Result<TrackResult> fine = alignAt(wide->T_world_camera, 0);
+          Result<TrackResult> fine = alignAgainstRenderAt(wide->T_world_camera);
           if (!fine.ok()) return fine.error();
           if (fine->state == TrackingState::kTracking) again = std::move(fine).value();
         }
