@@ -305,6 +305,44 @@ TEST(Localizer, AnUnknownVelocityStartSearchesUnlessTheFirstPoseIsConfident) {
   }
 }
 
+// The same search when its grid cannot reach as far as the prediction's uncertainty (a stream so
+// slow that the camera moves farther between two frames than the grid's steps: here a grid of one
+// step each way) has not seen every place the camera may be: a pose it keeps below
+// motion_search_start_score waits for the next frame, tracked from it, to confirm it
+// (initializing, then relocalized, then tracked). The control: the default grid reaches the
+// prediction's 3 sigma at this frame rate and its pose is taken at once. The feature start is off
+// (a feature pose the edges agree with is taken either way).
+TEST(Localizer, AnUnknownVelocityStartWhoseSearchFellShortWaitsForTheNextFrame) {
+  for (const int steps : {1, LocalizerOptions{}.motion_search_steps}) {
+    SCOPED_TRACE(steps);
+    auto localizer = makeEkfLocalizer([&](LocalizerOptions& o) {
+      o.motion_search_start_score = 0.999;
+      o.motion_search_steps = steps;
+      o.motion_search_feature_start = false;
+    });
+    ASSERT_TRUE(localizer);
+    localizer->reset(test::localizeTruth(0));  // no velocity
+    const auto results = run(*localizer, 4, 0, true);
+    ASSERT_EQ(results.size(), 4u);
+    EXPECT_EQ(results[0].state, TrackingState::kTracking);
+    EXPECT_GT(results[1].motion_search_probes, 0);
+    EXPECT_LT(results[1].verify_score, 0.999);
+    for (int i = 1; i < 4; ++i) {
+      EXPECT_LT(test::translationError(results[i].T_world_camera, test::localizeTruth(i)), 5e-3) << i;
+    }
+    if (steps == 1) {
+      EXPECT_EQ(results[1].state, TrackingState::kInitializing);
+      EXPECT_TRUE(results[1].confirming);
+      EXPECT_EQ(results[2].state, TrackingState::kRelocalized);
+    } else {
+      EXPECT_EQ(results[1].state, TrackingState::kTracking);
+      EXPECT_FALSE(results[1].confirming);
+      EXPECT_EQ(results[2].state, TrackingState::kTracking);
+    }
+    EXPECT_EQ(results[3].state, TrackingState::kTracking);
+  }
+}
+
 TEST(Localizer, AFarFrameAfterAnUnknownVelocityStartIsFoundFromPointFeatures) {
   // A start at frame 0 with no velocity, then frame 40 (the frames between not given, as at a
   // low frame rate; 0.70 m and a turn away): the point features matched with frame 0, lifted by

@@ -557,6 +557,9 @@ struct Localizer::Impl {
     int level = 0;
     double step_m = 0;
     int steps[2] = {0, 0};
+    /// The prediction's reach (search_sigmas sigma) spans more steps than motion_search_steps on
+    /// some axis: poses beyond the grid were not probed, a look-alike within it may be the best.
+    bool capped = false;
   };
   /// The grid when the prediction's uncertainty across the view spans more than one step; nullopt
   /// when the search does not apply (off, no depth or edge points, a settled prior).
@@ -565,7 +568,9 @@ struct Localizer::Impl {
     if (!grid) return std::nullopt;
     for (int a = 0; a < 2; ++a) {
       const double reach = options.search_sigmas * std::sqrt(std::max(0.0, prediction.covariance(a, a)));
-      grid->steps[a] = std::min(options.motion_search_steps, static_cast<int>(std::ceil(reach / grid->step_m - 0.5)));
+      const int steps = static_cast<int>(std::ceil(reach / grid->step_m - 0.5));
+      grid->steps[a] = std::min(options.motion_search_steps, steps);
+      grid->capped = grid->capped || steps > options.motion_search_steps;
     }
     if (grid->steps[0] == 0 && grid->steps[1] == 0) return std::nullopt;
     return grid;
@@ -594,12 +599,14 @@ struct Localizer::Impl {
   /// tracked, not refused and verified above both the search's minimum and incumbent_score.
   /// `confident_only`: the search's minimum is motion_search_confident_score (no gate checks a
   /// result; a feature start the edges agree with is returned as always, and the caller's rules
-  /// for any pose then apply).
+  /// for any pose then apply). `feature_agreed`, when given, is set to whether the pose returned
+  /// is the feature start's that the edges agreed with (two independent poses).
   template <typename AlignFrom, typename Refused>
   Result<TrackResult> motionSearch(const SearchGrid& grid, const MotionPrediction& prediction, const Pose& guess,
                                    const ImageU8& gray_now, TrackResult lost, double incumbent_score,
                                    AlignFrom& alignFrom, Refused& refused, LocalizationResult& out,
-                                   bool confident_only = false) {
+                                   bool confident_only = false, bool* feature_agreed = nullptr) {
+    if (feature_agreed) *feature_agreed = false;
     // Held: the shift's starts may make keyframes of their own current (the guess's is restored).
     const std::shared_ptr<const Keyframe> guess_keyframe = keyframes->current();
     const Keyframe& keyframe = *guess_keyframe;
@@ -704,7 +711,10 @@ struct Localizer::Impl {
           r->T_world_camera_edges = start;
           r->T_camera_ref = start.inverse() * keyframes->current()->reference.T_world_ref;
         }
-        if (agreed) return std::move(r).value();
+        if (agreed) {
+          if (feature_agreed) *feature_agreed = true;
+          return std::move(r).value();
+        }
         if (consider(std::move(r).value())) return std::move(*best);
       }
     }
@@ -1901,9 +1911,10 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   auto refused = [&](const TrackResult& r) {
     return gated(r) || (search_bound && !search_bound->holds(r.T_world_camera.translation()));
   };
+  bool feature_agreed = false;  // the search's pose is a feature start the edges agreed with
   if (incumbent_score) {
     Result<TrackResult> searched = m.motionSearch(*grid, *prediction, guess, gray, std::move(track), *incumbent_score,
-                                                  alignFrom, refused, out, confident_only);
+                                                  alignFrom, refused, out, confident_only, &feature_agreed);
     if (!searched.ok()) return searched.error();
     track = std::move(searched).value();
   }
@@ -2301,8 +2312,21 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   const bool after_lost_frames = (starting || start_dropped) && !m.database && m.first_t_ns && !on_first_frame;
   const bool start_frame_unvouched = starting && on_first_frame && !start_vouches &&
                                      out.state == TrackingState::kTracking && (m.last_imu || !m.database);
-  if ((after_lost_frames || start_frame_unvouched) && !confirmed && m.tracked_since_reset && !T_world_camera_guess &&
-      m.options.relocalization.confirm_start && m.start_anchor &&
+  // So does a pose taken on the first frame after an inertial start at an unknown velocity that
+  // verified below motion_search_start_score where the motion search's grid could not reach as far
+  // as the prediction's uncertainty (SearchGrid::capped: a stream so slow that the camera moves
+  // farther between two frames than the grid's steps reach): the search did not see every place
+  // the camera may be, and the pose sets the velocity the gate then holds every pose to. The room
+  // at 2 Hz (1.33 m between its first two frames, the grid's reach 0.62 m) took a look-alike 2.4 m
+  // from the truth at 0.69 there and bridged from it to 6 m off; now it is lost for 6 frames
+  // and tracked again at its 9th. Not a feature start the edges
+  // agreed with: point features matched with the frame before, whose pose was taken, do not match
+  // a look-alike place elsewhere (the motion search's feature start).
+  const bool search_fell_short = first_at_unknown_velocity && grid && grid->capped && !feature_agreed &&
+                                 out.state == TrackingState::kTracking && !out.visual_rejected &&
+                                 out.verify_score < m.options.motion_search_start_score;
+  if ((after_lost_frames || start_frame_unvouched || search_fell_short) && !confirmed && m.tracked_since_reset &&
+      !T_world_camera_guess && m.options.relocalization.confirm_start && m.start_anchor &&
       (out.state == TrackingState::kTracking || out.state == TrackingState::kRelocalized)) {
     m.start_on_probation = SearchAnchor{out.T_world_camera, t_ns, out.scene_depth_m};
     out.state = TrackingState::kInitializing;

@@ -137,7 +137,12 @@ struct RelocalizationOptions {
   /// farther than local_offset_fraction x the depth from the start pose (a start pose metres
   /// off whose first alignment slid onto a look-alike): with the IMU database or not, without
   /// it with no database (without the IMU such a pose is taken only at
-  /// LocalizerOptions::motion_search_confident_score).
+  /// LocalizerOptions::motion_search_confident_score). And, with the IMU, for the pose of the
+  /// first frame after a start at an unknown velocity verified below
+  /// LocalizerOptions::motion_search_start_score when the motion search's grid could not reach
+  /// the prediction's search_sigmas sigma (motion_search_steps too few for the frame interval;
+  /// not a feature start the edges agreed with): the search did not see every place the camera
+  /// may be (the room at 2 Hz took a look-alike 2.4 m from the truth at 0.69).
   bool confirm_start = true;
   /// Starts (of all candidates) aligned fully after the probes on the deepest level, most
   /// inliers above chance first (1..100).
