@@ -28,9 +28,9 @@ struct BuildArgs {
   std::string out;
   std::string volume;  ///< "x0,y0,z0,x1,y1,z1", metres; default: the ground truth's box + margin.
   double margin_m = 1.0;
-  double spacing_m = 1.0;
-  double corridor_m = 0;  ///< Radius of the corridor around the path, metres; 0: the whole box.
-  std::string path;       ///< TUM trajectory: the corridor's path (default: the sequence's ground truth).
+  std::string spacing = "auto";  ///< Metres, or "auto" (autoSpacing).
+  double corridor_m = 0;         ///< Radius of the corridor around the path, metres; 0: the whole box.
+  std::string path;              ///< TUM trajectory: the corridor's path (default: the sequence's ground truth).
   int headings = 12;
   std::string tilts;  ///< Degrees below the horizon, comma-separated; default: the ground truth's.
   double tilt_step_deg = 15.0;
@@ -48,6 +48,63 @@ double tiltBelowHorizonDeg(const Pose& T_world_camera, const Eigen::Vector3d& up
   return std::asin(std::clamp(-z.dot(up.normalized()), -1.0, 1.0)) * 180.0 / M_PI;
 }
 
+/// Views a build with "--spacing auto" may render at most: a finer spacing is made coarser to fit.
+constexpr size_t kAutoMaxViews = 300'000;
+
+/// Views of the placement at its spacing (positions x headings x tilts).
+size_t placementViews(const KeyframePlacement& placement) {
+  return take(placementPositions(placement)).size() * static_cast<size_t>(placement.headings) *
+         placement.tilts_deg.size();
+}
+
+/// "--spacing auto": kSpacingDepthFraction x the scene's typical depth (typicalSceneDepth) seen
+/// from the sequence's ground truth (at most 48 of its poses, evenly spread), else from a coarse
+/// grid of the placement's own views (5 positions along its longest side, 4 headings); made
+/// coarser where the views would exceed kAutoMaxViews. Sets placement.spacing_m; returns what
+/// the build prints about it.
+std::string autoSpacing(Renderer& renderer, const PinholeCamera& camera, const std::optional<Sequence>& seq,
+                        KeyframePlacement& placement) {
+  std::vector<Pose> views;
+  std::string from;
+  if (seq && !seq->groundtruth.empty()) {
+    const size_t n = seq->groundtruth.size(), take_n = std::min<size_t>(n, 48);
+    for (size_t i = 0; i < take_n; ++i) views.push_back(seq->groundtruth[i * n / take_n].T_world_camera);
+    from = fmt::format("{} ground-truth views", views.size());
+  } else {
+    KeyframePlacement coarse = placement;
+    double longest = 0;
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, double{placement.volume.max[k] - placement.volume.min[k]});
+    coarse.spacing_m = std::max(longest / 4.0, 1e-3);
+    coarse.headings = 4;
+    check(validateKeyframePlacement(coarse));
+    for (const Eigen::Vector3d& position : take(placementPositions(coarse))) {
+      for (double tilt : coarse.tilts_deg) {
+        for (int h = 0; h < coarse.headings; ++h) {
+          views.push_back(placementPose(position, coarse.up_world, 360.0 * h / coarse.headings, tilt));
+        }
+      }
+    }
+    from = fmt::format("{} views of a coarse grid", views.size());
+  }
+  const double depth_m = take(typicalSceneDepth(renderer, camera, views));
+  if (!(depth_m > 0)) {
+    throw Failure{fmt::format("--spacing auto: none of {} sees the model; give --spacing in metres", from)};
+  }
+  placement.spacing_m = kSpacingDepthFraction * depth_m;
+  std::string note =
+      fmt::format(" (auto: {:g} x the scene's typical depth {:.3g} m, from {})", kSpacingDepthFraction, depth_m, from);
+  for (int k = 0; k < 8; ++k) {
+    const size_t views_n = placementViews(placement);
+    if (views_n <= kAutoMaxViews) break;
+    placement.spacing_m *= 1.02 * std::cbrt(static_cast<double>(views_n) / static_cast<double>(kAutoMaxViews));
+    note = fmt::format(
+        " (auto: {:g} x the scene's typical depth {:.3g} m, from {}, made coarser to keep the views "
+        "within {})",
+        kSpacingDepthFraction, depth_m, from, kAutoMaxViews);
+  }
+  return note;
+}
+
 void runBuild(const BuildArgs& a) {
   PinholeCamera camera;
   Model model;
@@ -61,7 +118,14 @@ void runBuild(const BuildArgs& a) {
     model = a.model.load();
   }
   KeyframePlacement placement;
-  placement.spacing_m = a.spacing_m;
+  std::optional<double> spacing_m;  // none: "auto", chosen once a renderer is made
+  if (a.spacing != "auto") {
+    const std::vector<double> v = take(parseNumbers(a.spacing, "--spacing (metres, or auto)", 1));
+    if (!(v[0] >= 1e-3 && v[0] <= 1e6))
+      throw Failure{fmt::format("--spacing {}: expected 0.001..1e6 m or auto", a.spacing)};
+    spacing_m = v[0];
+    placement.spacing_m = v[0];
+  }
   placement.headings = a.headings;
   placement.min_clearance_m = a.clearance_m;
   if (!a.up.empty()) {
@@ -128,7 +192,7 @@ void runBuild(const BuildArgs& a) {
     placement.tilts_deg.clear();
     for (long s : steps) placement.tilts_deg.push_back(static_cast<double>(s) * a.tilt_step_deg);
   }
-  check(validateKeyframePlacement(placement));
+  if (spacing_m) check(validateKeyframePlacement(placement));
 
   // One Vulkan renderer (the device is parallel itself), or one CPU renderer per core.
   std::vector<std::unique_ptr<Renderer>> renderers;
@@ -155,17 +219,23 @@ void runBuild(const BuildArgs& a) {
   std::vector<Renderer*> pointers;
   for (const auto& r : renderers) pointers.push_back(r.get());
   const Renderer* renderer = renderers.front().get();
+  std::string spacing_note;
+  if (!spacing_m) {
+    spacing_note = autoSpacing(*renderers.front(), camera, seq, placement);
+    check(validateKeyframePlacement(placement));
+  }
   std::string tilts;
   for (double t : placement.tilts_deg) tilts += fmt::format("{}{:g}", tilts.empty() ? "" : ",", t);
   if (!a.quiet) {
     std::printf(
-        "volume [%.1f %.1f %.1f] .. [%.1f %.1f %.1f] m%s, spacing %.2f m, %d headings, tilts %s deg; %zu x %s\n",
+        "volume [%.1f %.1f %.1f] .. [%.1f %.1f %.1f] m%s, spacing %.3g m%s, %d headings, tilts %s deg; %zu x %s\n",
         placement.volume.min[0], placement.volume.min[1], placement.volume.min[2], placement.volume.max[0],
         placement.volume.max[1], placement.volume.max[2],
         placement.corridor.empty()
             ? ""
             : fmt::format(" within {:g} m of a path of {} poses", a.corridor_m, placement.corridor.size()).c_str(),
-        placement.spacing_m, placement.headings, tilts.c_str(), renderers.size(), renderer->describe().c_str());
+        placement.spacing_m, spacing_note.c_str(), placement.headings, tilts.c_str(), renderers.size(),
+        renderer->describe().c_str());
     std::fflush(stdout);
   }
   const auto t0 = SteadyClock::now();
@@ -237,8 +307,11 @@ void addKeyframesVerb(CLI::App& app) {
                      "Only positions within this radius of a path (--path, else the sequence's ground truth), metres")
         ->check(CLI::Range(0.0, 1e5));
     build->add_option("--path", args->path, "The corridor's path: a TUM trajectory (t tx ty tz qx qy qz qw), metres");
-    build->add_option("--spacing", args->spacing_m, "Grid spacing, metres")
-        ->check(CLI::Range(1e-3, 1e6))
+    build
+        ->add_option("--spacing", args->spacing,
+                     "Grid spacing, metres, or auto: 0.12 x the scene's typical depth seen from the ground truth "
+                     "(without one, from a coarse grid of the volume's views), coarser where the views would exceed "
+                     "300,000")
         ->capture_default_str();
     build->add_option("--headings", args->headings, "Headings per position")
         ->check(CLI::Range(1, 360))

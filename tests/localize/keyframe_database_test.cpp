@@ -129,6 +129,30 @@ TEST(KeyframeDatabase, PlacementPoseLooksAlongHeadingTiltedDown) {
   EXPECT_NEAR(a.linear().col(2).dot(b.linear().col(2)), 0.0, 1e-12);
 }
 
+// Views straight down onto the box scene's ground beside the box from 0.30, 0.45 and 0.60 m see
+// only the ground, every pixel at the view's height: the typical depth is the middle height. A view
+// looking up sees nothing and does not count; none that sees the model gives 0.
+TEST(KeyframeDatabase, TypicalSceneDepthIsTheMedianOfTheViewsMedianDepths) {
+  const Model model = test::makeBoxOnGround();
+  auto renderer = CpuRenderer::create(model);
+  ASSERT_TRUE(renderer.ok());
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  const Pose up_view = placementPose({0.8, 0.8, 0.5}, up, 0.0, -90.0);
+  std::vector<Pose> views = {up_view};
+  for (double h : {0.6, 0.3, 0.45}) views.push_back(placementPose({0.8, 0.8, h}, up, 30.0, 90.0));
+  Result<double> depth = typicalSceneDepth(**renderer, test::localizeCamera(), views);
+  ASSERT_TRUE(depth.ok()) << depth.error().message;
+  EXPECT_NEAR(*depth, 0.45, 1e-4);
+  Result<double> none = typicalSceneDepth(**renderer, test::localizeCamera(), {up_view});
+  ASSERT_TRUE(none.ok());
+  EXPECT_EQ(*none, 0.0);
+  for (double bad : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    Result<double> refused = typicalSceneDepth(**renderer, test::localizeCamera(), views, bad);
+    ASSERT_FALSE(refused.ok()) << bad;
+    EXPECT_NE(refused.error().message.find("min_model_fraction"), std::string::npos);
+  }
+}
+
 TEST(KeyframeDatabase, PlacementIsChecked) {
   KeyframePlacement p = boxPlacement();
   EXPECT_TRUE(validateKeyframePlacement(p).ok());

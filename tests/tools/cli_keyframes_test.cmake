@@ -105,6 +105,20 @@ endif()
 run_fails("truncated database" "cut.kdb: truncated or damaged" keyframes info ${WORK}/cut.kdb)
 run_ok("other model's database" keyframes build --model city --intrinsics 500,500,319.5,239.5,640,480
        --volume 0,0,20,10,10,20 --spacing 10 --headings 2 --tilts 45 --renderer cpu --out ${WORK}/city.kdb -q)
+# "--spacing auto" (the default): a fraction of the typical depth, here from a coarse grid of the
+# volume's own views (no ground truth); the city 20 m up, 45 deg down, ~28 m deep.
+run_ok("auto spacing" keyframes build --model city --intrinsics 500,500,319.5,239.5,640,480
+       --volume 0,0,20,10,10,20 --headings 2 --tilts 45 --renderer cpu --out ${WORK}/city_auto.kdb)
+if(NOT out MATCHES "spacing ([0-9.]+) m \\(auto: 0.12 x the scene's typical depth ([0-9.]+) m, from [0-9]+ views of a coarse grid\\)")
+  message(FATAL_ERROR "keyframes build --spacing auto output:\n${out}")
+endif()
+if(CMAKE_MATCH_1 LESS 1 OR CMAKE_MATCH_1 GREATER 8 OR CMAKE_MATCH_2 LESS 10 OR CMAKE_MATCH_2 GREATER 60)
+  message(FATAL_ERROR "keyframes build --spacing auto: spacing ${CMAKE_MATCH_1} m from depth ${CMAKE_MATCH_2} m")
+endif()
+run_fails("spacing neither metres nor auto" "--spacing" keyframes build --model city
+          --intrinsics 500,500,319.5,239.5,640,480 --volume 0,0,20,10,10,20 --spacing fine --out ${WORK}/x.kdb)
+run_fails("spacing out of range" "expected 0.001..1e6 m or auto" keyframes build --model city
+          --intrinsics 500,500,319.5,239.5,640,480 --volume 0,0,20,10,10,20 --spacing 0 --out ${WORK}/x.kdb)
 run_fails("database of another model" "another model" track --sequence ${seq} --out ${WORK}/x/traj.txt
           --db ${WORK}/city.kdb --backend cpu)
 run_fails("global init without a database" "--global-init needs --db" track --sequence ${seq}

@@ -459,6 +459,39 @@ PinholeCamera keyframeViewCamera(const PinholeCamera& camera) {
   return scaledCamera(camera, width);
 }
 
+Result<double> typicalSceneDepth(Renderer& renderer, const PinholeCamera& camera, const std::vector<Pose>& views,
+                                 double min_model_fraction) {
+  VKLOC_TRY_STATUS(validateCamera(camera));
+  if (!(min_model_fraction >= 0.0 && min_model_fraction <= 1.0)) {
+    return makeError(ErrorCode::kInvalidArgument, "typical scene depth: min_model_fraction must be in 0..1");
+  }
+  const PinholeCamera small = keyframeViewCamera(camera);
+  RenderSettings look;
+  look.outputs = kRenderDepth;
+  look.cull_back_faces = false;
+  const size_t pixels = static_cast<size_t>(small.width) * small.height;
+  std::vector<double> medians;
+  std::vector<float> depths;
+  for (const Pose& T_world_camera : views) {
+    Result<RenderOutput> out = renderer.render(small, T_world_camera, look);
+    if (!out.ok()) return out.error();
+    depths.clear();
+    for (float d : out->depth.data) {
+      if (d > 0.0f) depths.push_back(d);
+    }
+    if (depths.empty() || static_cast<double>(depths.size()) < min_model_fraction * static_cast<double>(pixels)) {
+      continue;
+    }
+    auto mid = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
+    std::nth_element(depths.begin(), mid, depths.end());
+    medians.push_back(*mid);
+  }
+  if (medians.empty()) return 0.0;
+  auto mid = medians.begin() + static_cast<std::ptrdiff_t>(medians.size() / 2);
+  std::nth_element(medians.begin(), mid, medians.end());
+  return *mid;
+}
+
 Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::vector<Renderer*>& renderers,
                                                const PinholeCamera& camera, const KeyframePlacement& placement,
                                                const RenderSettings& render,
