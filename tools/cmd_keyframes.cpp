@@ -6,8 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "common.hpp"
 #include "vkloc/core/clock.hpp"
@@ -51,58 +55,73 @@ double tiltBelowHorizonDeg(const Pose& T_world_camera, const Eigen::Vector3d& up
 /// Views a build with "--spacing auto" may render at most: a finer spacing is made coarser to fit.
 constexpr size_t kAutoMaxViews = 300'000;
 
-/// Views of the placement at its spacing (positions x headings x tilts).
-size_t placementViews(const KeyframePlacement& placement) {
-  return take(placementPositions(placement)).size() * static_cast<size_t>(placement.headings) *
-         placement.tilts_deg.size();
+/// Views of the placement at its spacing (positions x headings x tilts): of the box counted, of a
+/// corridor's positions listed (on a copy whose view limit is lifted, for counts beyond it).
+double placementViews(const KeyframePlacement& placement) {
+  double views = static_cast<double>(placement.headings) * static_cast<double>(placement.tilts_deg.size());
+  double box = 1;
+  for (int a = 0; a < 3; ++a) {
+    box *= std::floor(double{placement.volume.max[a] - placement.volume.min[a]} / placement.spacing_m) + 1;
+  }
+  // A corridor's positions are listed only where the box's count is within reach of a listing.
+  if (placement.corridor.empty() || box * views > 1e8) return box * views;
+  KeyframePlacement lifted = placement;
+  lifted.max_views = std::numeric_limits<size_t>::max();
+  return static_cast<double>(take(placementPositions(lifted)).size()) * views;
 }
 
-/// "--spacing auto": kSpacingDepthFraction x the scene's typical depth (typicalSceneDepth) seen
-/// from the sequence's ground truth (at most 48 of its poses, evenly spread), else from a coarse
-/// grid of the placement's own views (5 positions along its longest side, 4 headings); made
-/// coarser where the views would exceed kAutoMaxViews. Sets placement.spacing_m; returns what
-/// the build prints about it.
+/// "--spacing auto": kSpacingDepthFraction x the scene's typical depth (typicalSceneDepth, views
+/// nearer a surface than the placement's clearance left out) seen from the sequence's ground
+/// truth (at most 48 of its poses, evenly spread), else from the corridor's path (at most 48 of
+/// its points) or a coarse grid of the box (5 positions along its longest side), at the
+/// placement's tilts and 4 headings; made coarser until the views are at most kAutoMaxViews.
+/// Sets placement.spacing_m; returns what the build prints about it.
 std::string autoSpacing(Renderer& renderer, const PinholeCamera& camera, const std::optional<Sequence>& seq,
                         KeyframePlacement& placement) {
   std::vector<Pose> views;
   std::string from;
+  auto spread = [](size_t n, size_t at_most) {
+    std::vector<size_t> picked;
+    const size_t m = std::min(n, at_most);
+    for (size_t i = 0; i < m; ++i) picked.push_back(i * n / m);
+    return picked;
+  };
+  auto around = [&](const Eigen::Vector3d& position) {
+    for (double tilt : placement.tilts_deg) {
+      for (int h = 0; h < 4; ++h) views.push_back(placementPose(position, placement.up_world, 90.0 * h, tilt));
+    }
+  };
   if (seq && !seq->groundtruth.empty()) {
-    const size_t n = seq->groundtruth.size(), take_n = std::min<size_t>(n, 48);
-    for (size_t i = 0; i < take_n; ++i) views.push_back(seq->groundtruth[i * n / take_n].T_world_camera);
+    for (size_t i : spread(seq->groundtruth.size(), 48)) views.push_back(seq->groundtruth[i].T_world_camera);
     from = fmt::format("{} ground-truth views", views.size());
+  } else if (!placement.corridor.empty()) {
+    const std::vector<size_t> picked = spread(placement.corridor.size(), 48);
+    for (size_t i : picked) around(placement.corridor[i]);
+    from = fmt::format("{} views along the corridor's path", views.size());
   } else {
     KeyframePlacement coarse = placement;
     double longest = 0;
     for (int k = 0; k < 3; ++k) longest = std::max(longest, double{placement.volume.max[k] - placement.volume.min[k]});
     coarse.spacing_m = std::max(longest / 4.0, 1e-3);
-    coarse.headings = 4;
-    check(validateKeyframePlacement(coarse));
-    for (const Eigen::Vector3d& position : take(placementPositions(coarse))) {
-      for (double tilt : coarse.tilts_deg) {
-        for (int h = 0; h < coarse.headings; ++h) {
-          views.push_back(placementPose(position, coarse.up_world, 360.0 * h / coarse.headings, tilt));
-        }
-      }
-    }
+    for (const Eigen::Vector3d& position : take(placementPositions(coarse))) around(position);
     from = fmt::format("{} views of a coarse grid", views.size());
   }
-  const double depth_m = take(typicalSceneDepth(renderer, camera, views));
+  const double depth_m =
+      take(typicalSceneDepth(renderer, camera, views, placement.min_model_fraction, placement.min_clearance_m));
   if (!(depth_m > 0)) {
-    throw Failure{fmt::format("--spacing auto: none of {} sees the model; give --spacing in metres", from)};
+    throw Failure{
+        fmt::format("--spacing auto: none of {} sees the model in free space; give --spacing in metres", from)};
   }
-  placement.spacing_m = kSpacingDepthFraction * depth_m;
-  std::string note =
-      fmt::format(" (auto: {:g} x the scene's typical depth {:.3g} m, from {})", kSpacingDepthFraction, depth_m, from);
-  for (int k = 0; k < 8; ++k) {
-    const size_t views_n = placementViews(placement);
-    if (views_n <= kAutoMaxViews) break;
-    placement.spacing_m *= 1.02 * std::cbrt(static_cast<double>(views_n) / static_cast<double>(kAutoMaxViews));
-    note = fmt::format(
-        " (auto: {:g} x the scene's typical depth {:.3g} m, from {}, made coarser to keep the views "
-        "within {})",
-        kSpacingDepthFraction, depth_m, from, kAutoMaxViews);
+  placement.spacing_m = std::max(kSpacingDepthFraction * depth_m, 1e-3);
+  bool widened = false;
+  for (int k = 0; k < 60; ++k) {
+    const double views_n = placementViews(placement);
+    if (views_n <= static_cast<double>(kAutoMaxViews)) break;
+    placement.spacing_m *= std::max(1.05, std::cbrt(views_n / static_cast<double>(kAutoMaxViews)));
+    widened = true;
   }
-  return note;
+  return fmt::format(" (auto: {:g} x the scene's typical depth {:.3g} m, from {}{})", kSpacingDepthFraction, depth_m,
+                     from, widened ? fmt::format(", made coarser to keep the views within {}", kAutoMaxViews) : "");
 }
 
 void runBuild(const BuildArgs& a) {
@@ -192,7 +211,9 @@ void runBuild(const BuildArgs& a) {
     placement.tilts_deg.clear();
     for (long s : steps) placement.tilts_deg.push_back(static_cast<double>(s) * a.tilt_step_deg);
   }
-  if (spacing_m) check(validateKeyframePlacement(placement));
+  // Checked now (with a provisional spacing for "auto"), before any renderer is made.
+  if (!spacing_m) placement.spacing_m = 1e6;
+  check(validateKeyframePlacement(placement));
 
   // One Vulkan renderer (the device is parallel itself), or one CPU renderer per core.
   std::vector<std::unique_ptr<Renderer>> renderers;
@@ -309,9 +330,10 @@ void addKeyframesVerb(CLI::App& app) {
     build->add_option("--path", args->path, "The corridor's path: a TUM trajectory (t tx ty tz qx qy qz qw), metres");
     build
         ->add_option("--spacing", args->spacing,
-                     "Grid spacing, metres, or auto: 0.12 x the scene's typical depth seen from the ground truth "
-                     "(without one, from a coarse grid of the volume's views), coarser where the views would exceed "
-                     "300,000")
+                     fmt::format("Grid spacing, metres, or auto: {:g} x the scene's typical depth seen from the "
+                                 "ground truth (without one, from the corridor's path or a coarse grid of the volume), "
+                                 "coarser where the views would exceed {}",
+                                 kSpacingDepthFraction, kAutoMaxViews))
         ->capture_default_str();
     build->add_option("--headings", args->headings, "Headings per position")
         ->check(CLI::Range(1, 360))

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -129,27 +130,41 @@ TEST(KeyframeDatabase, PlacementPoseLooksAlongHeadingTiltedDown) {
   EXPECT_NEAR(a.linear().col(2).dot(b.linear().col(2)), 0.0, 1e-12);
 }
 
-// Views straight down onto the box scene's ground beside the box from 0.30, 0.45 and 0.60 m see
-// only the ground, every pixel at the view's height: the typical depth is the middle height. A view
-// looking up sees nothing and does not count; none that sees the model gives 0.
+// Views straight down onto the box scene's ground beside the box from 0.30, 0.35 and 0.60 m see
+// only the ground, every pixel at the view's height: the typical depth is the median height (not
+// the mean, 0.42). A view 0.9 m up over the ground's edge sees it on less than a fifth of its
+// pixels and counts only when that fraction is lowered (then 0.6, the median of four); one 0.3 m
+// up counts only when the clearance asked for is below 0.3 m. A view looking up sees nothing:
+// none that sees the model gives 0.
 TEST(KeyframeDatabase, TypicalSceneDepthIsTheMedianOfTheViewsMedianDepths) {
   const Model model = test::makeBoxOnGround();
   auto renderer = CpuRenderer::create(model);
   ASSERT_TRUE(renderer.ok());
+  const PinholeCamera camera = test::localizeCamera();
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   const Pose up_view = placementPose({0.8, 0.8, 0.5}, up, 0.0, -90.0);
-  std::vector<Pose> views = {up_view};
-  for (double h : {0.6, 0.3, 0.45}) views.push_back(placementPose({0.8, 0.8, h}, up, 30.0, 90.0));
-  Result<double> depth = typicalSceneDepth(**renderer, test::localizeCamera(), views);
-  ASSERT_TRUE(depth.ok()) << depth.error().message;
-  EXPECT_NEAR(*depth, 0.45, 1e-4);
-  Result<double> none = typicalSceneDepth(**renderer, test::localizeCamera(), {up_view});
+  const Pose edge_view = placementPose({1.6, 0.8, 0.9}, up, 0.0, 90.0);
+  std::vector<Pose> views = {up_view, edge_view};
+  for (double h : {0.6, 0.3, 0.35}) views.push_back(placementPose({0.8, 0.8, h}, up, 30.0, 90.0));
+  struct Case {
+    double min_model_fraction, min_clearance_m, depth_m;
+  };
+  for (const Case& c : {Case{0.2, 0.0, 0.35}, Case{0.01, 0.0, 0.6}, Case{0.2, 0.32, 0.6}, Case{0.2, 0.7, 0.0}}) {
+    SCOPED_TRACE(::testing::Message() << "fraction " << c.min_model_fraction << " clearance " << c.min_clearance_m);
+    Result<double> depth = typicalSceneDepth(**renderer, camera, views, c.min_model_fraction, c.min_clearance_m);
+    ASSERT_TRUE(depth.ok()) << depth.error().message;
+    EXPECT_NEAR(*depth, c.depth_m, 1e-4);
+  }
+  Result<double> none = typicalSceneDepth(**renderer, camera, {up_view});
   ASSERT_TRUE(none.ok());
   EXPECT_EQ(*none, 0.0);
   for (double bad : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
-    Result<double> refused = typicalSceneDepth(**renderer, test::localizeCamera(), views, bad);
+    Result<double> refused = typicalSceneDepth(**renderer, camera, views, bad);
     ASSERT_FALSE(refused.ok()) << bad;
     EXPECT_NE(refused.error().message.find("min_model_fraction"), std::string::npos);
+    refused = typicalSceneDepth(**renderer, camera, views, 0.2, bad < 0 || std::isnan(bad) ? bad : -bad);
+    ASSERT_FALSE(refused.ok()) << bad;
+    EXPECT_NE(refused.error().message.find("min_clearance_m"), std::string::npos);
   }
 }
 

@@ -310,15 +310,21 @@ TEST(Localizer, AnUnknownVelocityStartSearchesUnlessTheFirstPoseIsConfident) {
 // step each way) has not seen every place the camera may be: a pose it keeps below
 // motion_search_start_score waits for the next frame, tracked from it, to confirm it
 // (initializing, then relocalized, then tracked). The control: the default grid reaches the
-// prediction's 3 sigma at this frame rate and its pose is taken at once. The feature start is off
-// (a feature pose the edges agree with is taken either way).
+// prediction's 3 sigma at this frame rate and its pose is taken at once; so is, with the short
+// grid, a feature start the edges agreed with (point features matched with the frame before do
+// not match a look-alike place), the search's first start.
 TEST(Localizer, AnUnknownVelocityStartWhoseSearchFellShortWaitsForTheNextFrame) {
-  for (const int steps : {1, LocalizerOptions{}.motion_search_steps}) {
-    SCOPED_TRACE(steps);
+  struct Case {
+    int steps;
+    bool feature_start;
+  };
+  for (const Case c : {Case{1, false}, Case{LocalizerOptions{}.motion_search_steps, false}, Case{1, true}}) {
+    SCOPED_TRACE(::testing::Message() << "steps " << c.steps << " feature start " << c.feature_start);
+    const int steps = c.steps;
     auto localizer = makeEkfLocalizer([&](LocalizerOptions& o) {
       o.motion_search_start_score = 0.999;
       o.motion_search_steps = steps;
-      o.motion_search_feature_start = false;
+      o.motion_search_feature_start = c.feature_start;
     });
     ASSERT_TRUE(localizer);
     localizer->reset(test::localizeTruth(0));  // no velocity
@@ -330,7 +336,11 @@ TEST(Localizer, AnUnknownVelocityStartWhoseSearchFellShortWaitsForTheNextFrame) 
     for (int i = 1; i < 4; ++i) {
       EXPECT_LT(test::translationError(results[i].T_world_camera, test::localizeTruth(i)), 5e-3) << i;
     }
-    if (steps == 1) {
+    if (c.feature_start) {
+      EXPECT_EQ(results[1].motion_search_probes, 1);  // the feature start, agreed with
+      EXPECT_EQ(results[1].state, TrackingState::kTracking);
+      EXPECT_EQ(results[2].state, TrackingState::kTracking);
+    } else if (steps == 1) {
       EXPECT_EQ(results[1].state, TrackingState::kInitializing);
       EXPECT_TRUE(results[1].confirming);
       EXPECT_EQ(results[2].state, TrackingState::kRelocalized);

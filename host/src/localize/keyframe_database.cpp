@@ -460,10 +460,13 @@ PinholeCamera keyframeViewCamera(const PinholeCamera& camera) {
 }
 
 Result<double> typicalSceneDepth(Renderer& renderer, const PinholeCamera& camera, const std::vector<Pose>& views,
-                                 double min_model_fraction) {
+                                 double min_model_fraction, double min_clearance_m) {
   VKLOC_TRY_STATUS(validateCamera(camera));
   if (!(min_model_fraction >= 0.0 && min_model_fraction <= 1.0)) {
     return makeError(ErrorCode::kInvalidArgument, "typical scene depth: min_model_fraction must be in 0..1");
+  }
+  if (!(min_clearance_m >= 0.0) || !std::isfinite(min_clearance_m)) {
+    return makeError(ErrorCode::kInvalidArgument, "typical scene depth: min_clearance_m must be finite and >= 0");
   }
   const PinholeCamera small = keyframeViewCamera(camera);
   RenderSettings look;
@@ -476,10 +479,15 @@ Result<double> typicalSceneDepth(Renderer& renderer, const PinholeCamera& camera
     Result<RenderOutput> out = renderer.render(small, T_world_camera, look);
     if (!out.ok()) return out.error();
     depths.clear();
+    float nearest = std::numeric_limits<float>::infinity();
     for (float d : out->depth.data) {
-      if (d > 0.0f) depths.push_back(d);
+      if (d > 0.0f) {
+        depths.push_back(d);
+        nearest = std::min(nearest, d);
+      }
     }
-    if (depths.empty() || static_cast<double>(depths.size()) < min_model_fraction * static_cast<double>(pixels)) {
+    if (depths.empty() || static_cast<double>(depths.size()) < min_model_fraction * static_cast<double>(pixels) ||
+        nearest < min_clearance_m) {
       continue;
     }
     auto mid = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);

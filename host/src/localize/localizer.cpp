@@ -269,9 +269,9 @@ struct Localizer::Impl {
   std::optional<SearchAnchor> start_anchor;
   std::optional<int64_t> first_t_ns;  ///< The first frame's time since create/reset (forgetTrack).
   /// A first pose taken after lost frames without a database, or on the start's own frame beyond
-  /// where the start pose vouches (without the IMU: and without a database), waits for the next
-  /// frame to confirm it
-  /// (RelocalizationOptions::confirm_start): that pose and its frame's time while it waits;
+  /// where the start pose vouches (without the IMU: and without a database), or on the track's
+  /// second frame from a motion search that fell short (SearchGrid::capped), waits for the next
+  /// frame to confirm it (RelocalizationOptions::confirm_start): that pose and its frame's time while it waits;
   /// start_anchor and first_t_ns stay as they were before it (neither changes once a pose is taken).
   std::optional<SearchAnchor> start_on_probation;
   /// Consecutive poses the motion prior refused that count against it (refusalCountsAgainstPrior),
@@ -557,8 +557,9 @@ struct Localizer::Impl {
     int level = 0;
     double step_m = 0;
     int steps[2] = {0, 0};
-    /// The prediction's reach (search_sigmas sigma) spans more steps than motion_search_steps on
-    /// some axis: poses beyond the grid were not probed, a look-alike within it may be the best.
+    /// The prediction's reach (search_sigmas sigma) across the view spans more steps than
+    /// motion_search_steps on x or y: poses beyond the grid were not probed, a look-alike within it
+    /// may be the best. (Along the view the image shift's starts try at most 2 steps; not counted.)
     bool capped = false;
   };
   /// The grid when the prediction's uncertainty across the view spans more than one step; nullopt
@@ -568,9 +569,9 @@ struct Localizer::Impl {
     if (!grid) return std::nullopt;
     for (int a = 0; a < 2; ++a) {
       const double reach = options.search_sigmas * std::sqrt(std::max(0.0, prediction.covariance(a, a)));
-      const int steps = static_cast<int>(std::ceil(reach / grid->step_m - 0.5));
-      grid->steps[a] = std::min(options.motion_search_steps, steps);
+      const double steps = std::ceil(reach / grid->step_m - 0.5);  // compared as a double: reach may be huge
       grid->capped = grid->capped || steps > options.motion_search_steps;
+      grid->steps[a] = steps > options.motion_search_steps ? options.motion_search_steps : static_cast<int>(steps);
     }
     if (grid->steps[0] == 0 && grid->steps[1] == 0) return std::nullopt;
     return grid;
@@ -1862,6 +1863,10 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   };
   const bool first_at_unknown_velocity =
       prediction && prediction->inertial && prediction->velocity_unobserved && m.untracked == 0;
+  // The same, with no frame tracked since the start's own: the second frame of the track (not one
+  // after a restart of the prior mid-stream, whose pose is no start to go back to).
+  const bool second_frame_of_start =
+      first_at_unknown_velocity && m.first_t_ns && m.last_tracked_t_ns && *m.last_tracked_t_ns == *m.first_t_ns;
   // The grid first: a settled prior has none, and its frames are not tested against the gate twice.
   std::optional<Impl::SearchGrid> grid =
       !T_world_camera_guess && prediction && prediction->inertial ? m.searchGrid(*prediction) : std::nullopt;
@@ -2318,11 +2323,12 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // farther between two frames than the grid's steps reach): the search did not see every place
   // the camera may be, and the pose sets the velocity the gate then holds every pose to. The room
   // at 2 Hz (1.33 m between its first two frames, the grid's reach 0.62 m) took a look-alike 2.4 m
-  // from the truth at 0.69 there and bridged from it to 6 m off; now it is lost for 6 frames
-  // and tracked again at its 9th. Not a feature start the edges
-  // agreed with: point features matched with the frame before, whose pose was taken, do not match
-  // a look-alike place elsewhere (the motion search's feature start).
-  const bool search_fell_short = first_at_unknown_velocity && grid && grid->capped && !feature_agreed &&
+  // from the truth at 0.69 there and bridged from it to 6 m off; now its frames 1-8 have no
+  // pose and frame 9 is relocalized. Only on the track's second frame: mid-stream, after a
+  // restart of the prior at an unknown velocity, a dropped pose has no start to go back to. Not a feature start the
+  // edges agreed with: point features matched with the frame before, whose pose was taken, do not match a look-alike
+  // place elsewhere (the motion search's feature start).
+  const bool search_fell_short = second_frame_of_start && grid && grid->capped && !feature_agreed &&
                                  out.state == TrackingState::kTracking && !out.visual_rejected &&
                                  out.verify_score < m.options.motion_search_start_score;
   if ((after_lost_frames || start_frame_unvouched || search_fell_short) && !confirmed && m.tracked_since_reset &&

@@ -177,17 +177,19 @@ Status validateKeyframePlacement(const KeyframePlacement& placement);
 Result<std::vector<Eigen::Vector3d>> placementPositions(const KeyframePlacement& placement);
 
 /// Typical depth of the scene seen from `views` (world-frame camera poses), metres: the median,
-/// over the views that see the model on at least `min_model_fraction` of their pixels, of each
-/// view's median depth, rendered at keyframeViewCamera(camera) (as a database's views are). 0
-/// when no view sees the model. Errors: kInvalidArgument for a bad camera or fraction, the
+/// over the views that see the model on at least `min_model_fraction` of their pixels and whose
+/// nearest surface is at least `min_clearance_m` away (a view inside a wall does not count), of
+/// each view's median depth, rendered at keyframeViewCamera(camera) (as a database's views are).
+/// 0 when no view counts. Errors: kInvalidArgument for a bad camera, fraction or clearance, the
 /// renderer's as they come.
 Result<double> typicalSceneDepth(Renderer& renderer, const PinholeCamera& camera, const std::vector<Pose>& views,
-                                 double min_model_fraction = KeyframePlacement{}.min_model_fraction);
+                                 double min_model_fraction = KeyframePlacement{}.min_model_fraction,
+                                 double min_clearance_m = 0.0);
 
 /// Grid spacing of a database for a scene of typical depth `depth_m` (typicalSceneDepth): this
 /// fraction of it. Relocalization aligns from the nearest keyframes, and how far a keyframe may
-/// be from the camera scales with the depth (the development room, ~1.6 m deep: 95 % of STAR's
-/// queries recovered at 0.2 m, 75 % at 1 m; the city, ~35 m deep: 99 % at 4 m).
+/// be from the camera scales with the depth (the development room, 1.66 m deep: 95 % of STAR's
+/// queries recovered at 0.2 m, 75 % at 1 m; the city, 27 m deep: 99 % at 4 m and at 3.24 m).
 inline constexpr double kSpacingDepthFraction = 0.12;
 
 /// What a build did.
