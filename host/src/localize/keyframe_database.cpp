@@ -459,6 +459,18 @@ PinholeCamera keyframeViewCamera(const PinholeCamera& camera) {
   return scaledCamera(camera, width);
 }
 
+float surfaceDepths(const ImageF32& depth, std::vector<float>& depths) {
+  depths.clear();
+  float nearest = std::numeric_limits<float>::infinity();
+  for (float d : depth.data) {
+    if (d > 0.0f) {
+      depths.push_back(d);
+      nearest = std::min(nearest, d);
+    }
+  }
+  return nearest;
+}
+
 Result<double> typicalSceneDepth(Renderer& renderer, const PinholeCamera& camera, const std::vector<Pose>& views,
                                  double min_model_fraction, double min_clearance_m) {
   VKLOC_TRY_STATUS(validateCamera(camera));
@@ -478,14 +490,7 @@ Result<double> typicalSceneDepth(Renderer& renderer, const PinholeCamera& camera
   for (const Pose& T_world_camera : views) {
     Result<RenderOutput> out = renderer.render(small, T_world_camera, look);
     if (!out.ok()) return out.error();
-    depths.clear();
-    float nearest = std::numeric_limits<float>::infinity();
-    for (float d : out->depth.data) {
-      if (d > 0.0f) {
-        depths.push_back(d);
-        nearest = std::min(nearest, d);
-      }
-    }
+    const float nearest = surfaceDepths(out->depth, depths);
     if (depths.empty() || static_cast<double>(depths.size()) < min_model_fraction * static_cast<double>(pixels) ||
         nearest < min_clearance_m) {
       continue;
@@ -561,14 +566,7 @@ Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::ve
       View& view = views[v];
       Result<RenderOutput> out = renderer.render(small, poses[v], look);
       if (!out.ok()) return fail(out.error());
-      depths.clear();
-      float nearest = std::numeric_limits<float>::infinity();
-      for (float d : out->depth.data) {
-        if (d > 0.0f) {
-          nearest = std::min(nearest, d);
-          depths.push_back(d);
-        }
-      }
+      const float nearest = surfaceDepths(out->depth, depths);
       if (nearest < placement.min_clearance_m) {
         view.verdict = Verdict::kTooClose;
         continue;

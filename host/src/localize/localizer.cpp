@@ -843,14 +843,7 @@ struct Localizer::Impl {
               Eigen::AngleAxisd(tilt_deg * M_PI / 180.0, Eigen::Vector3d::UnitX()).toRotationMatrix();
           Result<RenderOutput> view = keyframes->renderView(small, T);
           if (!view.ok()) return view.error();
-          depths.clear();
-          float nearest = std::numeric_limits<float>::infinity();
-          for (float d : view->depth.data) {
-            if (d > 0.0f) {
-              depths.push_back(d);
-              nearest = std::min(nearest, d);
-            }
-          }
+          const float nearest = surfaceDepths(view->depth, depths);
           if (depths.size() * 5 < pixels || nearest < 0.05f) continue;
           auto mid = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
           std::nth_element(depths.begin(), mid, depths.end());

@@ -176,6 +176,10 @@ Status validateKeyframePlacement(const KeyframePlacement& placement);
 /// kInvalidArgument for a placement validateKeyframePlacement refuses.
 Result<std::vector<Eigen::Vector3d>> placementPositions(const KeyframePlacement& placement);
 
+/// The depths of a render's pixels that see the model (> 0, metres) into `depths` (cleared first);
+/// returns the nearest of them (infinity when none).
+float surfaceDepths(const ImageF32& depth, std::vector<float>& depths);
+
 /// Typical depth of the scene seen from `views` (world-frame camera poses), metres: the median,
 /// over the views that see the model on at least `min_model_fraction` of their pixels and whose
 /// nearest surface is at least `min_clearance_m` away (a view inside a wall does not count), of
