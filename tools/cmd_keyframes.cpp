@@ -55,19 +55,16 @@ double tiltBelowHorizonDeg(const Pose& T_world_camera, const Eigen::Vector3d& up
 /// Views a build with "--spacing auto" may render at most: a finer spacing is made coarser to fit.
 constexpr size_t kAutoMaxViews = 300'000;
 
-/// Views of the placement at its spacing (positions x headings x tilts): of the box counted, of a
-/// corridor's positions listed (on a copy whose view limit is lifted, for counts beyond it).
+/// Views of the placement at its spacing: the box's counted (placementBoxViews), a corridor's
+/// positions listed (on a copy whose view limit is lifted) where the box's count is within reach
+/// of a listing.
 double placementViews(const KeyframePlacement& placement) {
-  double views = static_cast<double>(placement.headings) * static_cast<double>(placement.tilts_deg.size());
-  double box = 1;
-  for (int a = 0; a < 3; ++a) {
-    box *= std::floor(double{placement.volume.max[a] - placement.volume.min[a]} / placement.spacing_m) + 1;
-  }
-  // A corridor's positions are listed only where the box's count is within reach of a listing.
-  if (placement.corridor.empty() || box * views > 1e8) return box * views;
+  const double box_views = placementBoxViews(placement);
+  if (placement.corridor.empty() || box_views > 1e8) return box_views;
   KeyframePlacement lifted = placement;
   lifted.max_views = std::numeric_limits<size_t>::max();
-  return static_cast<double>(take(placementPositions(lifted)).size()) * views;
+  return static_cast<double>(take(placementPositions(lifted)).size()) * static_cast<double>(placement.headings) *
+         static_cast<double>(placement.tilts_deg.size());
 }
 
 /// "--spacing auto": kSpacingDepthFraction x the scene's typical depth (typicalSceneDepth, views
@@ -137,12 +134,11 @@ void runBuild(const BuildArgs& a) {
     model = a.model.load();
   }
   KeyframePlacement placement;
-  std::optional<double> spacing_m;  // none: "auto", chosen once a renderer is made
-  if (a.spacing != "auto") {
+  const bool auto_spacing = a.spacing == "auto";  // chosen once a renderer is made
+  if (!auto_spacing) {
     const std::vector<double> v = take(parseNumbers(a.spacing, "--spacing (metres, or auto)", 1));
     if (!(v[0] >= 1e-3 && v[0] <= 1e6))
       throw Failure{fmt::format("--spacing {}: expected 0.001..1e6 m or auto", a.spacing)};
-    spacing_m = v[0];
     placement.spacing_m = v[0];
   }
   placement.headings = a.headings;
@@ -212,7 +208,7 @@ void runBuild(const BuildArgs& a) {
     for (long s : steps) placement.tilts_deg.push_back(static_cast<double>(s) * a.tilt_step_deg);
   }
   // Checked now (with a provisional spacing for "auto"), before any renderer is made.
-  if (!spacing_m) placement.spacing_m = 1e6;
+  if (auto_spacing) placement.spacing_m = 1e6;
   check(validateKeyframePlacement(placement));
 
   // One Vulkan renderer (the device is parallel itself), or one CPU renderer per core.
@@ -241,7 +237,7 @@ void runBuild(const BuildArgs& a) {
   for (const auto& r : renderers) pointers.push_back(r.get());
   const Renderer* renderer = renderers.front().get();
   std::string spacing_note;
-  if (!spacing_m) {
+  if (auto_spacing) {
     spacing_note = autoSpacing(*renderers.front(), camera, seq, placement);
     check(validateKeyframePlacement(placement));
   }

@@ -423,13 +423,18 @@ Status validateKeyframePlacement(const KeyframePlacement& p) {
     if (!cells.ok()) return cells.error();
     return Status::success();
   }
-  double views = static_cast<double>(p.headings) * static_cast<double>(p.tilts_deg.size());
-  for (int a = 0; a < 3; ++a) views *= std::floor((p.volume.max[a] - p.volume.min[a]) / p.spacing_m) + 1;
+  const double views = placementBoxViews(p);
   if (views > static_cast<double>(p.max_views)) {
     return bad(fmt::format("{:.3g} views exceed the limit of {} (a coarser spacing, fewer headings or tilts)", views,
                            p.max_views));
   }
   return Status::success();
+}
+
+double placementBoxViews(const KeyframePlacement& p) {
+  double views = static_cast<double>(p.headings) * static_cast<double>(p.tilts_deg.size());
+  for (int a = 0; a < 3; ++a) views *= std::floor((p.volume.max[a] - p.volume.min[a]) / p.spacing_m) + 1;
+  return views;
 }
 
 Result<std::vector<Eigen::Vector3d>> placementPositions(const KeyframePlacement& placement) {
@@ -485,6 +490,11 @@ Result<double> typicalSceneDepth(Renderer& renderer, const PinholeCamera& camera
   look.outputs = kRenderDepth;
   look.cull_back_faces = false;
   const size_t pixels = static_cast<size_t>(small.width) * small.height;
+  const auto median = [](auto& values) {  // of a non-empty vector, reordered
+    auto mid = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+    std::nth_element(values.begin(), mid, values.end());
+    return static_cast<double>(*mid);
+  };
   std::vector<double> medians;
   std::vector<float> depths;
   for (const Pose& T_world_camera : views) {
@@ -495,14 +505,9 @@ Result<double> typicalSceneDepth(Renderer& renderer, const PinholeCamera& camera
         nearest < min_clearance_m) {
       continue;
     }
-    auto mid = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
-    std::nth_element(depths.begin(), mid, depths.end());
-    medians.push_back(*mid);
+    medians.push_back(median(depths));
   }
-  if (medians.empty()) return 0.0;
-  auto mid = medians.begin() + static_cast<std::ptrdiff_t>(medians.size() / 2);
-  std::nth_element(medians.begin(), mid, medians.end());
-  return *mid;
+  return medians.empty() ? 0.0 : median(medians);
 }
 
 Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::vector<Renderer*>& renderers,

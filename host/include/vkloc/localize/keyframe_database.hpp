@@ -169,6 +169,10 @@ PinholeCamera keyframeViewCamera(const PinholeCamera& camera);
 /// view count at most max_views.
 Status validateKeyframePlacement(const KeyframePlacement& placement);
 
+/// Views of the placement's whole box at its spacing (grid positions x headings x tilts; a
+/// corridor's are fewer), as a double: a spacing far too fine counts beyond any integer. No checks.
+double placementBoxViews(const KeyframePlacement& placement);
+
 /// The placement's camera positions (world frame, metres): the grid points of the box, centred in
 /// it, spacing_m apart; with a corridor, only those within its radius of the polyline (followed
 /// through its points a quarter spacing apart, so a position within a quarter spacing of the
