@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <map>
 #include <random>
@@ -371,11 +372,14 @@ TEST(KeyframeDatabase, SavedFileLoadsAndDamagedOrForeignFilesAreRefused) {
   EXPECT_EQ(KeyframeDatabase::load(tempPath("missing")).error().code, ErrorCode::kNotFound);
 }
 
-/// confident_score >= 0 replaces LocalizerOptions::motion_search_confident_score.
-std::unique_ptr<Localizer> relocalizer(KeyframeThreading threading, double confident_score = -1) {
+/// confident_score >= 0 replaces LocalizerOptions::motion_search_confident_score; `tune` changes
+/// any other option.
+std::unique_ptr<Localizer> relocalizer(KeyframeThreading threading, double confident_score = -1,
+                                       const std::function<void(LocalizerOptions&)>& tune = {}) {
   LocalizerOptions options;
   options.keyframe_threading = threading;
   if (confident_score >= 0) options.motion_search_confident_score = confident_score;
+  if (tune) tune(options);
   auto created = Localizer::create(test::makeAsymmetricScene(), test::localizeCamera(), options, nullptr);
   EXPECT_TRUE(created.ok()) << created.error().message;
   if (!created.ok()) return nullptr;
@@ -421,6 +425,51 @@ TEST(Relocalization, GlobalInitializationFindsTheFirstPoseAndTracksOn) {
       EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i)), 5e-3) << i;
       EXPECT_LT(test::rotationErrorDeg(r->T_world_camera, test::localizeTruth(i)), 0.3) << i;
     }
+  }
+}
+
+// The frame that would confirm the search's pose aligns from it at the unknown velocity of the
+// restart; where its motion search fell short (a grid of one step each way, which cannot reach
+// the prediction's 3 sigma: a stream so slow that the camera moves farther between two frames
+// than the grid reaches; verified below motion_search_start_score) it vouches for nothing, and
+// the wait goes on one frame, which aligns at the velocity of the two poses and confirms them.
+// The control: the default grid reaches, and its frame confirms at once.
+TEST(Relocalization, AConfirmingFrameWhoseSearchFellShortWaitsOneFrameMore) {
+  for (const int steps : {1, LocalizerOptions{}.motion_search_steps}) {
+    SCOPED_TRACE(steps);
+    auto localizer = relocalizer(KeyframeThreading::kSynchronous, -1, [&](LocalizerOptions& o) {
+      o.motion_search_start_score = 0.999;
+      o.motion_search_steps = steps;
+      o.motion_search_feature_start = false;  // the grid's own starts
+    });
+    ASSERT_TRUE(localizer);
+    ASSERT_TRUE(localizer->startSearch(SearchRegion{test::localizeTruth(0).translation(), 1.0}).ok());
+    ImuFeed imu{*localizer};
+    std::vector<LocalizationResult> results;
+    for (int i = 0; i < 5; ++i) {
+      imu.upTo(i * 50'000'000);
+      const Result<LocalizationResult> r = localizer->localize(i * 50'000'000, asymmetricFrame(i));
+      ASSERT_TRUE(r.ok()) << r.error().message;
+      results.push_back(*r);
+      EXPECT_LT(test::translationError(r->T_world_camera, test::localizeTruth(i)), 5e-3) << i;
+    }
+    EXPECT_TRUE(results[0].confirming);
+    EXPECT_GT(results[1].motion_search_probes, 0);
+    EXPECT_LT(results[1].verify_score, 0.999);
+    EXPECT_EQ(results[1].relocalization_candidates, 0) << "tracked from the search's pose, not searched";
+    if (steps == 1) {
+      EXPECT_EQ(results[1].state, TrackingState::kInitializing);
+      EXPECT_TRUE(results[1].confirming);
+      EXPECT_EQ(results[2].state, TrackingState::kRelocalized);
+      EXPECT_EQ(results[2].relocalization_candidates, 0);
+    } else {
+      EXPECT_EQ(results[1].state, TrackingState::kRelocalized);
+      EXPECT_FALSE(results[1].confirming);
+      EXPECT_EQ(results[2].state, TrackingState::kTracking);
+    }
+    EXPECT_FALSE(results[2].confirming);
+    EXPECT_EQ(results[3].state, TrackingState::kTracking);
+    EXPECT_EQ(results[4].state, TrackingState::kTracking);
   }
 }
 

@@ -320,10 +320,11 @@ struct Localizer::Impl {
   uint64_t model_fingerprint = 0;
   bool searching = false;                     ///< Global initialization in progress (startSearch).
   std::optional<SearchRegion> search_region;  ///< Its region (nullopt: the whole database).
-  bool confirming = false;    ///< Its pose waits for the next frame (RelocalizationOptions::confirm_start).
-  bool relocalizing = false;  ///< A relocalization search is aligning (no point filter).
-  int untracked = 0;          ///< Frames in a row not tracked.
-  int failed_searches = 0;    ///< Searches since the last tracked frame that found nothing.
+  bool confirming = false;        ///< Its pose waits for the next frame (RelocalizationOptions::confirm_start).
+  bool confirm_extended = false;  ///< That wait went on a frame (5a: the frame after fell short).
+  bool relocalizing = false;      ///< A relocalization search is aligning (no point filter).
+  int untracked = 0;              ///< Frames in a row not tracked.
+  int failed_searches = 0;        ///< Searches since the last tracked frame that found nothing.
   std::optional<int64_t> last_tracked_t_ns;  ///< Time of the last tracked frame.
   std::optional<ImuSample> last_imu;  ///< Newest IMU reading taken (given again when the prior restarts: restartPrior).
   std::optional<int64_t> last_relocalized_t_ns;  ///< Time of the last relocalized frame.
@@ -1548,7 +1549,7 @@ void Localizer::reset(const Pose& T_world_camera, const std::optional<Eigen::Vec
   m.last_t_ns.reset();
   m.forgetTrack();
   m.searching = false;
-  m.confirming = false;
+  m.confirming = m.confirm_extended = false;
   m.search_region.reset();
   m.last_imu.reset();
   if (m.front && isValidPose(T_world_camera)) {
@@ -1588,7 +1589,7 @@ Status Localizer::setKeyframeDatabase(std::shared_ptr<const KeyframeDatabase> da
     m.database_min = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
     m.database_max = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   }
-  if (!m.database) m.searching = m.confirming = false;
+  if (!m.database) m.searching = m.confirming = m.confirm_extended = false;
   return Status::success();
 }
 
@@ -1756,7 +1757,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // 0. A frame with nothing to align (black, saturated, uniform): reported at once; the motion
   // prior bridges it (the IMU keeps running), and no alignment, search or relocalization runs.
   if (T_world_camera_guess) {
-    m.searching = m.confirming = false;
+    m.searching = m.confirming = m.confirm_extended = false;
     m.start_on_probation.reset();  // the caller's pose vouches
   }
   double image_contrast = 0;
@@ -2107,12 +2108,29 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // 5a. Global initialization's pose on probation (confirm_start): this frame, tracked from it
   // and taken, confirms it; otherwise the pose is dropped and this frame is searched again in
   // the prior's region (as the frames before the search found it).
+  // A frame tracked from it at the unknown velocity of the search's restart whose motion search
+  // fell short (the grid capped below the prediction's reach, verified below
+  // motion_search_start_score, not a feature start the edges agreed with: a stream so slow that
+  // the camera moves farther between two frames than the grid reaches) vouches for nothing: it
+  // may have taken a look-alike near the prediction. The wait goes on one frame, which then
+  // aligns at the velocity the two poses give and confirms both or drops them (once: that frame's
+  // velocity is known, so its search is not one at an unknown velocity). The room at 2 Hz started
+  // from a prior of sigma 1 m confirmed a pose 2.7 m off at 0.70 this way and bridged to 5.3 m off.
   bool confirmed = false;
+  bool waits_on = false;
   if (m.confirming) {
     m.confirming = false;
-    if (out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted) {
+    const bool taken = out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted;
+    const bool fell_short = first_at_unknown_velocity && grid && grid->capped && !feature_agreed &&
+                            out.verify_score < m.options.motion_search_start_score;
+    if (taken && fell_short && !m.confirm_extended) {
+      m.confirming = m.confirm_extended = true;  // reported kInitializing below, tracked meanwhile
+      waits_on = true;
+    } else if (taken) {
+      m.confirm_extended = false;
       confirmed = true;  // reported kRelocalized below
     } else {
+      m.confirm_extended = false;
       m.motion->reset(std::nullopt, std::nullopt);
       m.forgetTrack();
       // The frame is reported as the searches before the pose was found were: no pose, only
@@ -2324,14 +2342,18 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   const bool search_fell_short = second_frame_of_start && grid && grid->capped && !feature_agreed &&
                                  out.state == TrackingState::kTracking && !out.visual_rejected &&
                                  out.verify_score < m.options.motion_search_start_score;
-  if ((after_lost_frames || start_frame_unvouched || search_fell_short) && !confirmed && m.tracked_since_reset &&
-      !T_world_camera_guess && m.options.relocalization.confirm_start && m.start_anchor &&
+  if ((after_lost_frames || start_frame_unvouched || search_fell_short) && !confirmed && !waits_on &&
+      m.tracked_since_reset && !T_world_camera_guess && m.options.relocalization.confirm_start && m.start_anchor &&
       (out.state == TrackingState::kTracking || out.state == TrackingState::kRelocalized)) {
     m.start_on_probation = SearchAnchor{out.T_world_camera, t_ns, out.scene_depth_m};
     out.state = TrackingState::kInitializing;
     out.confirming = true;
   }
   if (confirmed) out.state = TrackingState::kRelocalized;
+  if (waits_on) {
+    out.state = TrackingState::kInitializing;
+    out.confirming = true;
+  }
 
   // 6. Worker mode: the next keyframe, at the pose the camera will have when it is ready.
   if (m.worker()) {

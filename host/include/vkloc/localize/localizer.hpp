@@ -142,7 +142,9 @@ struct RelocalizationOptions {
   /// LocalizerOptions::motion_search_start_score when the motion search's grid could not reach
   /// the prediction's search_sigmas sigma (motion_search_steps too few for the frame interval;
   /// not a feature start the edges agreed with): the search did not see every place the camera
-  /// may be (the room at 2 Hz took a look-alike 2.4 m from the truth at 0.69).
+  /// may be (the room at 2 Hz took a look-alike 2.4 m from the truth at 0.69). Such a frame,
+  /// when it is the one that would confirm a global search's pose, confirms nothing either: the
+  /// wait goes on one frame, which aligns at the velocity of the two poses.
   bool confirm_start = true;
   /// Starts (of all candidates) aligned fully after the probes on the deepest level, most
   /// inliers above chance first (1..100).
