@@ -462,8 +462,10 @@ struct LocalizationResult {
   int search_level = 0;          ///< Deepest pyramid level the prior's uncertainty made the alignment start at.
   int motion_search_probes = 0;  ///< Start translations probed by the motion search (0: none ran).
   double image_shift_px = 0;     ///< Image shift the motion search measured, pixels (0: none).
-  /// Global initialization found a pose on this frame that the next frame confirms
-  /// (RelocalizationOptions::confirm_start): state is kInitializing, T_world_camera that pose.
+  /// This frame's pose is on probation until a later frame confirms it
+  /// (RelocalizationOptions::confirm_start): state is kInitializing, T_world_camera that pose (a
+  /// global search's, a first pose after lost frames, or a frame tracked from such a pose whose
+  /// motion search fell short, which waits one frame more).
   bool confirming = false;
   /// Database keyframes aligned by a relocalization search on this frame (0: none ran), the
   /// radius of its region (metres; infinite: the whole database; a local search's: its bound,
