@@ -2108,13 +2108,15 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // 5a. Global initialization's pose on probation (confirm_start): this frame, tracked from it
   // and taken, confirms it; otherwise the pose is dropped and this frame is searched again in
   // the prior's region (as the frames before the search found it).
-  // A frame tracked from it at the unknown velocity of the search's restart (the next, or the
-  // first after black frames) whose motion search fell short (the grid capped below the prediction's reach, verified
-  // below motion_search_start_score, not a feature start the edges agreed with: a stream so slow that the camera moves
-  // farther between two frames than the grid reaches) vouches for nothing: it may have taken a look-alike near the
-  // prediction. The wait goes on one frame, which then aligns at the velocity the two poses give and confirms both or
-  // drops them (once: that frame's velocity is known, so its search is not one at an unknown velocity). The room at 2
-  // Hz started from a prior of sigma 1 m confirmed a pose 2.7 m off at 0.70 this way and bridged to 5.3 m off.
+  // A frame tracked from it at the unknown velocity of the search's restart (the next frame, or
+  // the first after black frames) whose motion search fell short (the grid capped below the
+  // prediction's reach, verified below motion_search_start_score, not a feature start the edges
+  // agreed with: a stream so slow that the camera moves farther between two frames than the grid
+  // reaches) vouches for nothing: it may have taken a look-alike near the prediction. The wait
+  // goes on one frame, which then aligns at the velocity the two poses give and confirms both or
+  // drops them (once: that frame's velocity is known, so its search is not one at an unknown
+  // velocity). The room at 2 Hz started from a prior of sigma 1 m confirmed a pose 2.7 m off at
+  // 0.70 this way and bridged to 5.3 m off.
   bool confirmed = false;
   bool waits_on = false;
   if (m.confirming) {
