@@ -1917,6 +1917,12 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     if (!searched.ok()) return searched.error();
     track = std::move(searched).value();
   }
+  // The pose this frame takes may be a look-alike near the prediction: the motion search's grid
+  // could not reach as far as the prediction's uncertainty (SearchGrid::capped), the pose verified
+  // below motion_search_start_score and is not a feature start the edges agreed with (5a, 5a').
+  auto searchFellShort = [&] {
+    return grid && grid->capped && !feature_agreed && out.verify_score < m.options.motion_search_start_score;
+  };
   // 4. Start-up: widen the basin until a first frame is tracked.
   if (!m.tracked_since_reset) {
     InitializerSteps steps;
@@ -2122,8 +2128,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   if (m.confirming) {
     m.confirming = false;
     const bool taken = out.state == TrackingState::kTracking && !out.visual_rejected && !out.prior_restarted;
-    const bool fell_short = prediction && prediction->inertial && prediction->velocity_unobserved && grid &&
-                            grid->capped && !feature_agreed && out.verify_score < m.options.motion_search_start_score;
+    const bool fell_short = prediction && prediction->inertial && prediction->velocity_unobserved && searchFellShort();
     if (taken && fell_short && !m.confirm_extended) {
       m.confirming = m.confirm_extended = true;  // reported kInitializing below, tracked meanwhile
       waits_on = true;
@@ -2340,9 +2345,8 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   // restart of the prior at an unknown velocity, a dropped pose has no start to go back to. Not a feature start the
   // edges agreed with: point features matched with the frame before, whose pose was taken, do not match a look-alike
   // place elsewhere (the motion search's feature start).
-  const bool search_fell_short = second_frame_of_start && grid && grid->capped && !feature_agreed &&
-                                 out.state == TrackingState::kTracking && !out.visual_rejected &&
-                                 out.verify_score < m.options.motion_search_start_score;
+  const bool search_fell_short =
+      second_frame_of_start && out.state == TrackingState::kTracking && !out.visual_rejected && searchFellShort();
   if ((after_lost_frames || start_frame_unvouched || search_fell_short) && !confirmed && !waits_on &&
       m.tracked_since_reset && !T_world_camera_guess && m.options.relocalization.confirm_start && m.start_anchor &&
       (out.state == TrackingState::kTracking || out.state == TrackingState::kRelocalized)) {
