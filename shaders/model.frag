@@ -17,7 +17,9 @@ layout(location = 1) in vec4 in_color;
 
 layout(location = 0) out vec4 out_color;
 layout(location = 1) out float out_depth;   // camera z, metres
-layout(location = 2) out uint out_normal;   // octahedral camera-frame normal, packSnorm2x16
+// Octahedral camera-frame normal facing the camera, packSnorm2x16; bit 0 (the x half's least
+// significant bit, 3e-5 of its range) holds 1 on back faces (RenderOutput::back_faces).
+layout(location = 2) out uint out_normal;
 
 void main() {
   vec4 c = pc.base_color * in_color;
@@ -36,6 +38,8 @@ void main() {
     vec3 p = vec3((uv_px - pc.intrinsics.zw) / pc.intrinsics.xy * z, z);
     vec3 n = normalize(cross(dFdx(p), dFdy(p)));
     if (dot(n, p) > 0.0) n = -n;
-    out_normal = packSnorm2x16(octEncode(n));
+    // gl_FrontFacing follows the pipeline's VK_FRONT_FACE_COUNTER_CLOCKWISE, the CPU reference's
+    // plane-sign test (cpu_renderer.cpp, "Winding and back faces").
+    out_normal = (packSnorm2x16(octEncode(n)) & ~1u) | (gl_FrontFacing ? 0u : 1u);
   }
 }

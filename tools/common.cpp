@@ -298,6 +298,10 @@ std::vector<std::string> writeRender(const std::string& dir, const std::string& 
     paths.push_back(path("_normals.png"));
     check(writePng(paths.back(), n));
   }
+  if (!out.back_faces.empty()) {
+    paths.push_back(path("_back_faces.png"));
+    check(writePng(paths.back(), out.back_faces));
+  }
   return paths;
 }
 

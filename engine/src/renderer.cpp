@@ -620,13 +620,17 @@ Result<RenderOutput> GpuRenderer::Impl::readTargets() {
   out.gray = rgbaToGray(out.rgba);
   if (normals) {
     out.normals = ImageF32(iw, ih, 3, 0.0f);
-    // unpackSnorm2x16: low half is x, high half is y, each clamp(v / 32767, -1, 1).
+    out.back_faces = ImageU8(iw, ih, 1, 0);
+    // unpackSnorm2x16: low half is x, high half is y, each clamp(v / 32767, -1, 1); bit 0 of x
+    // is the back-face bit (shaders/model.frag).
     const auto* words = reinterpret_cast<const int16_t*>(enc);
     constexpr float kScale = 1.0f / 32767.0f;
     for (VkDeviceSize i = 0; i < pixels; ++i) {
       if (out.depth.data[i] == kBackgroundDepth) continue;
-      octDecode(std::max(-1.0f, words[2 * i] * kScale), std::max(-1.0f, words[2 * i + 1] * kScale),
-                &out.normals.data[i * 3]);
+      const int16_t x = words[2 * i];
+      out.back_faces.data[i] = (x & 1) ? 255 : 0;
+      const auto x_even = static_cast<int16_t>(x & ~1);
+      octDecode(std::max(-1.0f, x_even * kScale), std::max(-1.0f, words[2 * i + 1] * kScale), &out.normals.data[i * 3]);
     }
   }
   return out;

@@ -245,6 +245,58 @@ TEST_F(GpuRender, BackFaceCullingKeepsClosedModelsIdentical) {
   for (float z : inside.depth.data) ASSERT_EQ(z, kBackgroundDepth);
 }
 
+TEST_F(GpuRender, BackFacesMatchReference) {
+  // The box without its top from above (back faces through the hole, front faces around it)
+  // and the closed box from inside (back faces only): the flag (gl_FrontFacing) equals the CPU
+  // reference's plane-sign test on every pixel both see at the same depth, and the normal
+  // stays the camera-facing one beside it.
+  const Eigen::Vector3d lo(-1, -0.5, -0.8), hi(1.2, 0.7, 0.9);
+  const PinholeCamera cam = vga();
+  struct Case {
+    Model model;
+    Pose T_world_camera;
+    bool expect_front;
+  };
+  const Case cases[] = {
+      {makeBox(lo, hi, true), cameraLookingAt({2.0, -2.5, 3.5}, {0.1, 0.05, 0.2}), true},
+      {makeBox(lo, hi), cameraLookingAt({0.1, 0.05, 0.2}, {1.0, 0.4, 0.5}), false},
+  };
+  for (const Case& c : cases) {
+    const RenderOutput out = render(c.model, cam, c.T_world_camera);
+    auto ref = renderReference(c.model, cam, c.T_world_camera);
+    ASSERT_TRUE(ref.ok());
+    ASSERT_EQ(out.back_faces.width, cam.width);
+    ASSERT_EQ(out.back_faces.height, cam.height);
+    int back = 0, front = 0, compared = 0, mismatched = 0;
+    double worst_normal = 0;
+    for (int v = 0; v < cam.height; ++v) {
+      for (int u = 0; u < cam.width; ++u) {
+        const float zg = out.depth.at(u, v), zr = ref->depth.at(u, v);
+        if (zg <= 0) {
+          EXPECT_EQ(out.back_faces.at(u, v), 0);
+          continue;
+        }
+        if (zr <= 0 || std::abs(zg - zr) > 1e-4 * zr) continue;  // another triangle at a discontinuity
+        ++compared;
+        mismatched += out.back_faces.at(u, v) != ref->back_faces.at(u, v);
+        (out.back_faces.at(u, v) ? back : front) += 1;
+        for (int ch = 0; ch < 3; ++ch) {
+          worst_normal = std::max(worst_normal, double(std::abs(out.normals.at(u, v, ch) - ref->normals.at(u, v, ch))));
+        }
+      }
+    }
+    EXPECT_GT(compared, cam.width * cam.height / 8);
+    EXPECT_EQ(mismatched, 0);
+    EXPECT_GT(back, 5000);
+    if (c.expect_front) {
+      EXPECT_GT(front, 5000);
+    } else {
+      EXPECT_EQ(front, 0);
+    }
+    EXPECT_LT(worst_normal, 1e-3);
+  }
+}
+
 TEST_F(GpuRender, RejectsInvalidInputWithoutCrashing) {
   const Model box = makeBox({-1, -1, -1}, {1, 1, 1});
   auto renderer = GpuRenderer::create(context_, box);
@@ -289,6 +341,7 @@ TEST_F(GpuRender, RenderOnGpuThenReadbackEqualsRender) {
   EXPECT_EQ(c->depth.data, a->depth.data);
   EXPECT_EQ(c->rgba.data, a->rgba.data);
   EXPECT_EQ(c->normals.data, a->normals.data);
+  EXPECT_EQ(c->back_faces.data, a->back_faces.data);
 }
 
 TEST_F(GpuRender, LevelOfDetailStaysWithinItsPixelErrorBound) {
@@ -401,6 +454,7 @@ TEST_F(GpuRender, StagingAndDirectMemoryPathsAgree) {
   EXPECT_EQ(ra->gray.data, rb->gray.data);
   EXPECT_EQ(ra->depth.data, rb->depth.data);
   EXPECT_EQ(ra->normals.data, rb->normals.data);
+  EXPECT_EQ(ra->back_faces.data, rb->back_faces.data);
   RenderSettings no_normals;
   no_normals.outputs = kRenderColor | kRenderDepth;
   auto na = (*a)->render(vga(), T, no_normals);

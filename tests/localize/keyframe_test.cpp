@@ -117,7 +117,7 @@ TEST(KeyframeMaker, MakesEdgePointsAndLeavesOutDroppedKinds) {
   };
   EXPECT_GT(count(k.reference.points, kEdgeOcclusion) + count(k.reference.points, kEdgeCrease), 0u);
   KeyframeRequest drop = requestAt(0);
-  drop.dropped_kinds = {true, true, true};
+  drop.dropped_kinds = {true, true, true, true};
   auto textured = maker->make(drop);
   ASSERT_TRUE(textured.ok());
   EXPECT_EQ((*textured)->id, 2u);

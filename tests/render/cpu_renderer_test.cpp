@@ -755,6 +755,52 @@ TEST(ReferenceRender, BackFaceCullingKeepsClosedMeshesAndDropsBackFaces) {
   for (float z : from_inside.depth.data) ASSERT_EQ(z, kBackgroundDepth);
 }
 
+TEST(ReferenceRender, BackFacesAreFlaggedWhereTheSurfaceIsSeenFromBehind) {
+  const BoxScene s;
+  // Outside the closed box: front faces only; the flag comes with the normals.
+  const RenderOutput outside = renderOk(s.model, s.cam, s.T);
+  ASSERT_EQ(outside.back_faces.width, s.cam.width);
+  ASSERT_EQ(outside.back_faces.channels, 1);
+  for (uint8_t b : outside.back_faces.data) ASSERT_EQ(b, 0);
+  RenderSettings no_normals;
+  no_normals.outputs = kRenderColor | kRenderDepth;
+  EXPECT_TRUE(renderOk(s.model, s.cam, s.T, no_normals).back_faces.empty());
+  // Inside it: every surface pixel is a back face.
+  const RenderOutput inside = renderOk(s.model, s.cam, test::cameraLookingAt({0.1, 0.05, 0.6}, {0.6, 0.5, 0.7}));
+  for (size_t i = 0; i < inside.depth.data.size(); ++i) {
+    ASSERT_GT(inside.depth.data[i], 0.0f);
+    ASSERT_EQ(inside.back_faces.data[i], 255);
+  }
+  // The box without its top seen from above: through the hole the inside of the far walls and
+  // of the floor (back faces), around it the outer walls (front faces).
+  const Model open = test::makeBox(s.lo, s.hi, true);
+  const Pose above = test::cameraLookingAt({1.6, -2.0, 3.2}, {0.0, 0.0, 0.4});
+  const RenderOutput out = renderOk(open, s.cam, above);
+  int back = 0, front = 0;
+  for (int j = 0; j < s.cam.height; ++j) {
+    for (int i = 0; i < s.cam.width; ++i) {
+      const Ray ray = test::pixelRay(s.cam, above, i, j);
+      const auto hit = test::rayBox(ray, s.lo, s.hi);
+      if (!hit) {
+        EXPECT_EQ(out.back_faces.at(i, j), 0);
+        continue;
+      }
+      // Skip pixels within 1e-6 m of an edge of the entry face, where either side is right.
+      const Eigen::Vector3d p = ray.origin + hit->t * ray.direction;
+      int on_bounds = 0;
+      for (int a = 0; a < 3; ++a) {
+        on_bounds += std::abs(p[a] - s.lo[a]) < 1e-6 || std::abs(p[a] - s.hi[a]) < 1e-6;
+      }
+      if (on_bounds > 1) continue;
+      const bool through_hole = hit->normal.z() > 0;
+      EXPECT_EQ(out.back_faces.at(i, j), through_hole ? 255 : 0) << i << "," << j;
+      (through_hole ? back : front) += 1;
+    }
+  }
+  EXPECT_GT(back, 5000);
+  EXPECT_GT(front, 5000);
+}
+
 // --- 10. inputs and bookkeeping ---------------------------------------------------------------
 
 TEST(ReferenceRender, InvalidInputsReturnErrors) {

@@ -90,12 +90,14 @@ inline Model makePlane(const Eigen::Vector3d& center, const Eigen::Vector3d& nor
 }
 
 /// An axis-aligned box [lo, hi] (world frame) as 12 triangles, counter-clockwise seen from
-/// outside, 4 vertices per face with uv 0..1 on each face.
-inline Model makeBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+/// outside, 4 vertices per face with uv 0..1 on each face. open_top leaves out the +z face (a
+/// hole: from above, the inside of the walls and of the floor is seen from behind).
+inline Model makeBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, bool open_top = false) {
   Model m;
   m.source = "analytic box";
   for (int axis = 0; axis < 3; ++axis) {
     for (int side = 0; side < 2; ++side) {
+      if (open_top && axis == 2 && side == 1) continue;
       Eigen::Vector3d n = Eigen::Vector3d::Zero();
       n[axis] = side ? 1.0 : -1.0;
       // Face spanned by the two other axes; appendQuad's front t x s must point along n.

@@ -612,6 +612,53 @@ TEST(ReferenceEdges, SubsampleRespectsBudgetAndCellsDeterministically) {
   EXPECT_EQ(subsampleEdgePoints(points, cam, options).size(), 50u);
 }
 
+TEST(ReferenceEdges, PointsSeenThroughAHoleAreMarkedNearABackFace) {
+  // A closed box without its top, seen from above: through the opening the inside of the walls
+  // and of the floor (back faces) with their creases, and the opening's rim against them; the
+  // outer walls are front faces. Untextured: geometric edges only.
+  const Eigen::Vector3d lo(-0.5, -0.375, 0.0), hi(0.625, 0.5, 1.25);
+  PinholeCamera cam;
+  cam.width = 320;
+  cam.height = 240;
+  cam.fx = cam.fy = 300;
+  cam.cx = 159.5;
+  cam.cy = 119.5;
+  const Pose T_world_ref = test::cameraLookingAt({1.3, -1.5, 3.6}, {0.06, 0.06, 0.4});
+  ReferenceEdgeOptions options;
+  options.levels = 1;
+  auto points = [&](const Model& model, bool with_back_faces) {
+    auto view = renderReference(model, cam, T_world_ref);
+    EXPECT_TRUE(view.ok());
+    if (!with_back_faces) view->back_faces = ImageU8{};
+    auto ref = buildEdgeReference(*view, cam, T_world_ref, options);
+    EXPECT_TRUE(ref.ok());
+    return ref.ok() ? ref->points : std::vector<EdgePoint>{};
+  };
+  // Where the line of sight to a point crosses the plane of the opening (z = hi.z): inside the
+  // opening (by more than 1 cm) for the points seen through it, outside it (by more than 5 cm)
+  // for points on the outer walls well below the rim.
+  const Eigen::Vector3d eye = T_world_ref.translation();
+  int inside = 0, outside = 0;
+  for (const EdgePoint& p : points(test::makeBox(lo, hi, true), true)) {
+    const Eigen::Vector3d w = T_world_ref * Eigen::Vector3d(p.x, p.y, p.z);
+    const Eigen::Vector3d crossing = eye + (eye.z() - hi.z()) / (eye.z() - w.z()) * (w - eye);
+    const double margin = std::min({crossing.x() - lo.x(), hi.x() - crossing.x(), crossing.y() - lo.y(),
+                                    hi.y() - crossing.y()});  // > 0 inside the opening
+    if (w.z() < hi.z() - 0.03 && margin > 0.01) {
+      ++inside;
+      EXPECT_TRUE(p.kind & kEdgeBackFace) << w.transpose();
+    } else if (w.z() < hi.z() - 0.15 && margin < -0.05) {
+      ++outside;
+      EXPECT_EQ(p.kind & kEdgeBackFace, 0u) << w.transpose();
+    }
+  }
+  EXPECT_GT(inside, 20);
+  EXPECT_GT(outside, 20);
+  // The closed box shows no back face; a render without the mask marks none.
+  for (const EdgePoint& p : points(test::makeBox(lo, hi), true)) EXPECT_EQ(p.kind & kEdgeBackFace, 0u);
+  for (const EdgePoint& p : points(test::makeBox(lo, hi, true), false)) EXPECT_EQ(p.kind & kEdgeBackFace, 0u);
+}
+
 TEST(ReferenceEdges, HoleRimsAreDroppedAndSilhouettesKept) {
   // A 1 m square wall in the plane z = 0 with an 8 cm square hole in its centre, seen head-on
   // from 1.5 m (200 px per metre): the hole is 16 px wide, the wall's outline 200 px.

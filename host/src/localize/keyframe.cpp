@@ -65,8 +65,9 @@ Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeReques
       buildEdgeReference(std::move(*view), camera_, request.T_world_ref, reference_options);
   if (!reference.ok()) return reference.error();
   const EdgeKindMask& drop = request.dropped_kinds;
-  if (drop[0] || drop[1] || drop[2]) {
+  if (drop[0] || drop[1] || drop[2] || drop[3]) {
     auto dropped = [&](uint32_t kind) {
+      if (kind & kEdgeBackFace) return drop[3];
       if (kind & kEdgeBackground) return drop[2];
       return (drop[0] && kind == kEdgeOcclusion) || (drop[1] && kind == kEdgeCrease);
     };

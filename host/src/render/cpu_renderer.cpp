@@ -384,6 +384,7 @@ class Rasterizer {
     }
     const double area = signedArea(s[0], s[1], s[2]);
     if (area == 0 || !std::isfinite(area)) return;
+    const uint8_t back_face = plane_d < 0 ? 0 : 255;  // see the file comment
     // Edge k is opposite corner k; its value is corner k's (unnormalised) barycentric.
     const Edge edge[3] = {makeEdge(s[1], s[2], area), makeEdge(s[2], s[0], area), makeEdge(s[0], s[1], area)};
 
@@ -424,6 +425,7 @@ class Rasterizer {
         depth_[band_idx] = z;
         if (!out_.normals.empty()) {
           for (int ch = 0; ch < 3; ++ch) out_.normals.data[idx * 3 + ch] = normal[ch];
+          out_.back_faces.data[idx] = back_face;
         }
         if (!shade_) continue;  // colour not asked for: it stays the background
         // Shaded once per pixel after all triangles (shadeWinners): a surface drawn over later
@@ -552,7 +554,10 @@ Result<RenderOutput> renderWithMipLevels(const Model& model, const std::vector<s
     std::copy(settings.background_rgba.begin(), settings.background_rgba.end(), &out.rgba.data[i]);
   }
   out.depth = ImageF32(w, h, 1, kBackgroundDepth);
-  if (settings.outputs & kRenderNormals) out.normals = ImageF32(w, h, 3, 0.0f);
+  if (settings.outputs & kRenderNormals) {
+    out.normals = ImageF32(w, h, 3, 0.0f);
+    out.back_faces = ImageU8(w, h, 1, 0);
+  }
 
   const Pose T_camera_world = T_world_camera.inverse(Eigen::Isometry);
   std::vector<Eigen::Vector3d> p_camera(model.vertexCount());

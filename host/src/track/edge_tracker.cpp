@@ -634,8 +634,9 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
   const std::vector<float>& residuals = *final_residuals;
   int inliers = 0;
   double inlier_sum = 0;
-  std::array<int, 4> kind_inliers{};
+  std::array<int, 5> kind_inliers{};
   auto kindIndex = [](uint32_t kind) {
+    if (kind & kEdgeBackFace) return 4;
     if (kind & kEdgeBackground) return 3;
     return kind == kEdgeOcclusion ? 1 : kind == kEdgeCrease ? 2 : kind == kEdgeTexture ? 0 : -1;
   };

@@ -85,15 +85,24 @@ Status validateReferenceEdgeOptions(const ReferenceEdgeOptions& o) {
 
 namespace {
 
-/// The reference view at one pyramid level: gray (0..255), depth (m), normals (3 channels).
+/// The reference view at one pyramid level: gray (0..255), depth (m), normals (3 channels),
+/// back faces (RenderOutput::back_faces; empty when the render has none).
 struct ReferenceLevel {
   ImageF32 gray;
   ImageF32 depth;
   ImageF32 normals;
+  ImageU8 back_faces;
 };
 
-/// Halves a reference level: gray as the live pyramid (downsampleHalf), depth and normals of
-/// the nearest surface among the 2x2 input pixels an output pixel covers.
+/// The back-face mask when it matches the depth's size, else null (not known).
+const ImageU8* backFacesOf(const ImageU8& back_faces, const ImageF32& depth) {
+  const bool usable = back_faces.channels == 1 && back_faces.width == depth.width &&
+                      back_faces.height == depth.height && !back_faces.empty();
+  return usable ? &back_faces : nullptr;
+}
+
+/// Halves a reference level: gray as the live pyramid (downsampleHalf), depth, normals and
+/// back-face flag of the nearest surface among the 2x2 input pixels an output pixel covers.
 ReferenceLevel downsampleReference(const ReferenceLevel& in) {
   ReferenceLevel out;
   out.gray = downsampleHalf(in.gray);
@@ -102,6 +111,8 @@ ReferenceLevel downsampleReference(const ReferenceLevel& in) {
   out.depth = ImageF32(w, h, 1, 0.0f);
   const bool normals = in.normals.channels == 3 && in.normals.width == in.depth.width;
   if (normals) out.normals = ImageF32(w, h, 3, 0.0f);
+  const ImageU8* back_faces = backFacesOf(in.back_faces, in.depth);
+  if (back_faces) out.back_faces = ImageU8(w, h, 1, 0);
   const int in_w = in.depth.width;
   const int in_h = in.depth.height;
   for (int y = 0; y < h; ++y) {
@@ -127,6 +138,7 @@ ReferenceLevel downsampleReference(const ReferenceLevel& in) {
         }
       }
       depth_out[x] = best;
+      if (back_faces && found) out.back_faces.data[static_cast<size_t>(y) * w + x] = back_faces->data[source];
       if (normals && found) {
         const float* n = &in.normals.data[source * 3];
         float* o = &out.normals.data[(static_cast<size_t>(y) * w + x) * 3];
@@ -334,7 +346,8 @@ Result<ImageU8> detectReferenceEdges(const RenderOutput& view, const ReferenceEd
     return makeError(ErrorCode::kInvalidArgument,
                      "detectReferenceEdges: view needs a gray image and a depth image of the same size");
   }
-  return detectReferenceEdgesImpl(ReferenceLevel{toFloat(view.gray), view.depth, view.normals}, options);
+  return detectReferenceEdgesImpl(ReferenceLevel{toFloat(view.gray), view.depth, view.normals, view.back_faces},
+                                  options);
 }
 
 namespace {
@@ -342,8 +355,8 @@ namespace {
 /// Stage 2 (backProjectEdges); with the gradients the texture edges were found on, texture
 /// edge points are moved to their sub-pixel edge (subpixelOffset).
 std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32& depth, const PinholeCamera& camera,
-                                            const ReferenceEdgeOptions& options,
-                                            const EdgeGradients* texture_gradients) {
+                                            const ReferenceEdgeOptions& options, const EdgeGradients* texture_gradients,
+                                            const ImageU8* back_faces) {
   std::vector<EdgePoint> points;
   const int w = flags.width;
   const int h = flags.height;
@@ -354,30 +367,37 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
     const float z = depth.at(x, y);
     return isSurface(z) ? z : 0.0f;
   };
-  int px = 0, py = 0;        // pixel whose flags are emitted
-  int near_background = -1;  // whether background lies within 2 pixels of (px, py); -1: not known yet
-  auto nearBackground = [&]() {
-    if (near_background >= 0) return near_background == 1;
-    near_background = 0;
+  const uint8_t* back = back_faces ? back_faces->data.data() : nullptr;
+  // kEdgeBackground / kEdgeBackFace of pixel i: no surface there, or a back face.
+  auto modifiersOf = [&](size_t i) -> uint32_t {
+    return (isSurface(depth.data[i]) ? 0u : kEdgeBackground) | (back && back[i] ? kEdgeBackFace : 0u);
+  };
+  int px = 0, py = 0;  // pixel whose flags are emitted
+  // Modifier bits of the pixels within 2 pixels of (px, py); -1: not known yet.
+  int64_t near_modifiers = -1;
+  auto nearModifiers = [&]() -> uint32_t {
+    if (near_modifiers >= 0) return static_cast<uint32_t>(near_modifiers);
+    uint32_t m = 0;
     if (px >= 2 && py >= 2 && px + 2 < w && py + 2 < h) {
-      for (int dy = -2; dy <= 2 && !near_background; ++dy) {
-        const float* row = &depth.data[static_cast<size_t>(py + dy) * w + px - 2];
-        for (int dx = 0; dx < 5; ++dx) near_background |= !isSurface(row[dx]);
+      for (int dy = -2; dy <= 2; ++dy) {
+        const size_t row = static_cast<size_t>(py + dy) * w + px - 2;
+        for (size_t dx = 0; dx < 5; ++dx) m |= modifiersOf(row + dx);
       }
-      return near_background == 1;
-    }
-    for (int dy = -2; dy <= 2; ++dy) {
-      for (int dx = -2; dx <= 2; ++dx) {
-        const int nx = px + dx;
-        const int ny = py + dy;
-        if (nx >= 0 && ny >= 0 && nx < w && ny < h && depthAt(nx, ny) <= 0) near_background = 1;
+    } else {
+      for (int dy = -2; dy <= 2; ++dy) {
+        for (int dx = -2; dx <= 2; ++dx) {
+          const int nx = px + dx;
+          const int ny = py + dy;
+          if (nx >= 0 && ny >= 0 && nx < w && ny < h) m |= modifiersOf(static_cast<size_t>(ny) * w + nx);
+        }
       }
     }
-    return near_background == 1;
+    near_modifiers = m;
+    return m;
   };
   auto emit = [&](double u, double v, double z, uint32_t kind) {
     // Eq. 3: P = pi^-1(u, Z) with metric depth Z (camera z).
-    if (nearBackground()) kind |= kEdgeBackground;
+    kind |= nearModifiers();
     EdgePoint p;
     p.x = static_cast<float>(z * (u - camera.cx) / camera.fx);
     p.y = static_cast<float>(z * (v - camera.cy) / camera.fy);
@@ -396,7 +416,7 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
       if (!f) continue;
       px = x;
       py = y;
-      near_background = -1;
+      near_modifiers = -1;
       const float zp = depthAt(x, y);
       if (f & kEdgePixelTexture) {
         // On or next to a depth jump the edge belongs to the near surface: take the smallest
@@ -442,7 +462,7 @@ std::vector<EdgePoint> backProjectEdgesImpl(const ImageU8& flags, const ImageF32
 
 std::vector<EdgePoint> backProjectEdges(const ImageU8& flags, const ImageF32& depth, const PinholeCamera& camera,
                                         const ReferenceEdgeOptions& options) {
-  return backProjectEdgesImpl(flags, depth, camera, options, nullptr);
+  return backProjectEdgesImpl(flags, depth, camera, options, nullptr, nullptr);
 }
 
 std::vector<EdgePoint> subsampleEdgePoints(const std::vector<EdgePoint>& points, const PinholeCamera& camera,
@@ -562,7 +582,8 @@ Result<EdgeReference> buildEdgeReferenceFrom(ReferenceLevel level0, const Pinhol
       const TextureEdges* level_texture = options.texture_edges ? &texture[i] : nullptr;
       const ImageU8 flags = mergeReferenceEdges(level, std::move(geometric[i]), level_texture);
       points[i] = subsampleEdgePoints(backProjectEdgesImpl(flags, level.depth, level_camera, options,
-                                                           level_texture ? &level_texture->gradients : nullptr),
+                                                           level_texture ? &level_texture->gradients : nullptr,
+                                                           backFacesOf(level.back_faces, level.depth)),
                                       level_camera, options);
     }
   });
@@ -576,15 +597,16 @@ Result<EdgeReference> buildEdgeReferenceFrom(ReferenceLevel level0, const Pinhol
 Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const PinholeCamera& camera, const Pose& T_world_ref,
                                          const ReferenceEdgeOptions& options) {
   VKLOC_TRY_STATUS(validateReferenceView(view, camera, T_world_ref, options));
-  return buildEdgeReferenceFrom(ReferenceLevel{toFloat(view.gray), view.depth, view.normals}, camera, T_world_ref,
-                                options);
+  return buildEdgeReferenceFrom(ReferenceLevel{toFloat(view.gray), view.depth, view.normals, view.back_faces}, camera,
+                                T_world_ref, options);
 }
 
 Result<EdgeReference> buildEdgeReference(RenderOutput&& view, const PinholeCamera& camera, const Pose& T_world_ref,
                                          const ReferenceEdgeOptions& options) {
   VKLOC_TRY_STATUS(validateReferenceView(view, camera, T_world_ref, options));
-  return buildEdgeReferenceFrom(ReferenceLevel{toFloat(view.gray), std::move(view.depth), std::move(view.normals)},
-                                camera, T_world_ref, options);
+  return buildEdgeReferenceFrom(
+      ReferenceLevel{toFloat(view.gray), std::move(view.depth), std::move(view.normals), std::move(view.back_faces)},
+      camera, T_world_ref, options);
 }
 
 }  // namespace vkloc

@@ -21,9 +21,10 @@
 
 namespace vkloc {
 
-/// Which edge kinds a keyframe leaves out: [occlusion, crease, near background] (texture edges
-/// are always kept). See KeyframeManager's edge-kind learning.
-using EdgeKindMask = std::array<bool, 3>;
+/// Which edge kinds a keyframe leaves out: [occlusion, crease, near background, near a back
+/// face] (texture edges are always kept; a point near a back face is of that kind whatever else
+/// it is). See KeyframeManager's edge-kind learning.
+using EdgeKindMask = std::array<bool, 4>;
 
 /// What to make a keyframe of.
 struct KeyframeRequest {

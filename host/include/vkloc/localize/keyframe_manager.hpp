@@ -58,9 +58,9 @@ struct KeyframeManagerOptions {
   /// Learn which geometric edges the live images show (an unlit render's creases and silhouettes
   /// may have no intensity edge in them, and rims of model holes none at all): after each tracked
   /// frame, the running mean (weight 0.3) of the inlier ratio of occlusion points, of crease
-  /// points and of points near background (kEdgeBackground) is compared with the texture
-  /// points'; a kind below kind_visibility_ratio times the texture's is left out of later
-  /// keyframes (README, "Accuracy", has the measured ratios).
+  /// points, of points near background (kEdgeBackground) and of points near a back face
+  /// (kEdgeBackFace) is compared with the texture points'; a kind below kind_visibility_ratio times the texture's is
+  /// left out of later keyframes (README, "Accuracy", has the measured ratios).
   bool adapt_edge_kinds = true;
   double kind_visibility_ratio = 0.7;  ///< See adapt_edge_kinds (0..1).
 };
@@ -117,7 +117,7 @@ class KeyframeManager {
   void reset();
 
   /// Edge kinds left out of new keyframes.
-  EdgeKindMask droppedKinds() const { return {kind_dropped_[1], kind_dropped_[2], kind_dropped_[3]}; }
+  EdgeKindMask droppedKinds() const { return {kind_dropped_[1], kind_dropped_[2], kind_dropped_[3], kind_dropped_[4]}; }
   /// Frames tracked with the current keyframe.
   int framesOnKeyframe() const { return frames_on_keyframe_; }
 
@@ -133,10 +133,10 @@ class KeyframeManager {
   int frames_on_keyframe_ = 0;
   double last_inlier_ratio_ = 1.0;
   bool last_lost_ = false;
-  // Running inlier ratio per kind [texture, occlusion, crease, near background] (-1: not
-  // measured yet) and the kinds left out of keyframes.
-  std::array<double, 4> kind_inlier_mean_{-1.0, -1.0, -1.0, -1.0};
-  std::array<bool, 4> kind_dropped_{false, false, false, false};
+  // Running inlier ratio per kind [texture, occlusion, crease, near background, near a back
+  // face] (-1: not measured yet) and the kinds left out of keyframes.
+  std::array<double, 5> kind_inlier_mean_{-1.0, -1.0, -1.0, -1.0, -1.0};
+  std::array<bool, 5> kind_dropped_{};
 };
 
 }  // namespace vkloc

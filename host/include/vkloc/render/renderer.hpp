@@ -55,6 +55,12 @@ struct RenderOutput {
   /// 3 channels, unit face normal in the camera frame pointing towards the camera; (0, 0, 0)
   /// on background.
   ImageF32 normals;
+  /// 1 channel, filled with the normals: 255 where the visible surface is seen from behind (a
+  /// back face: its winding is clockwise on the screen, the camera lies on the inner side of a
+  /// closed model's surface), 0 on front faces and background. Through a hole in a closed model
+  /// the inside of the far walls is seen from behind; the world shows neither it nor the hole's
+  /// rim. Models whose winding is inconsistent or inward mark true surfaces too.
+  ImageU8 back_faces;
   uint32_t blocks_drawn = 0;     ///< Blocks that passed frustum culling.
   uint32_t triangles_drawn = 0;  ///< Triangles submitted after culling.
 };

@@ -171,10 +171,11 @@ struct TrackQuality {
   int points_in_image = 0;         ///< Points projecting inside the finest level's image.
   int points_used = 0;             ///< Points with a valid residual (not truncated) at the end.
   int iterations = 0;              ///< Gauss-Newton iterations over all levels.
-  /// inlier_ratio of the points of each kind: [texture, occlusion, crease, near background]
-  /// (the first three without kEdgeBackground; 0 without points).
-  std::array<double, 4> kind_inlier_ratio{};
-  std::array<int, 4> kind_points_in_image{};  ///< points_in_image per kind, as kind_inlier_ratio.
+  /// inlier_ratio of the points of each kind: [texture, occlusion, crease, near background,
+  /// near a back face] (the first three without either modifier, the fourth without
+  /// kEdgeBackFace; 0 without points).
+  std::array<double, 5> kind_inlier_ratio{};
+  std::array<int, 5> kind_points_in_image{};  ///< points_in_image per kind, as kind_inlier_ratio.
 };
 
 /// Output of trackFrame.

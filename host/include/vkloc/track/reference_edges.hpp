@@ -40,6 +40,11 @@ enum EdgeKind : uint32_t {
   /// background (no surface) in the render: a silhouette against the sky or the rim of a hole
   /// through a damaged model (which live images do not show).
   kEdgeBackground = 1u << 3,
+  /// Modifier bit: the point's pixel lies within 2 pixels of a back face in the render
+  /// (RenderOutput::back_faces): the inside of a closed model seen through a hole in it and that
+  /// hole's rim, which live images do not show (or, in a model with inconsistent winding, a true
+  /// surface; KeyframeManagerOptions::adapt_edge_kinds learns which).
+  kEdgeBackFace = 1u << 4,
 };
 
 /// A 3D edge point in the reference camera frame; 16 bytes, the std430 layout of a vec4.
@@ -107,7 +112,9 @@ Result<ImageU8> detectReferenceEdges(const RenderOutput& view, const ReferenceEd
 /// boundary between the pixel pair, half a pixel from the flagged pixel towards its
 /// neighbour, with the depth of the near surface (occlusion: the near pixel's depth, linearly
 /// extrapolated by half a pixel from the near side when that side is continuous; crease: the
-/// mean of the two depths). Pixels without depth are skipped.
+/// mean of the two depths). Pixels without depth are skipped. Points within 2 pixels of
+/// background get kEdgeBackground; kEdgeBackFace needs the render's back-face mask, which only
+/// buildEdgeReference has.
 /// One point is made per flag bit. `options` gives depth_jump_ratio (continuity test).
 std::vector<EdgePoint> backProjectEdges(const ImageU8& flags, const ImageF32& depth, const PinholeCamera& camera,
                                         const ReferenceEdgeOptions& options = {});
@@ -141,8 +148,9 @@ inline const std::vector<EdgePoint>& edgePointsForLevel(const EdgeReference& ref
 
 /// Runs stages 1-3 on a view rendered with `camera` at T_world_ref at `options.levels` pyramid
 /// levels: level k's gray image is downsampled exactly as the live pyramid (downsampleHalf), its
-/// depth and normals are those of the nearest surface in each 2x2 block, and its points are
-/// back-projected with pyramidCamera(camera, k) (levels below 8x8 pixels are not built).
+/// depth, normals and back-face flag are those of the nearest surface in each 2x2 block, and its
+/// points are back-projected with pyramidCamera(camera, k) (levels below 8x8 pixels are not
+/// built). Points near a back face get kEdgeBackFace when the view has back_faces.
 /// kInvalidArgument on bad options, sizes that differ from the camera's or an invalid pose.
 Result<EdgeReference> buildEdgeReference(const RenderOutput& view, const PinholeCamera& camera, const Pose& T_world_ref,
                                          const ReferenceEdgeOptions& options = {});
