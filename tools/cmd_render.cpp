@@ -76,7 +76,7 @@ static void addRenderVerb(CLI::App& app) {
   cmd->add_option("--near", args->near_m, "Near clip plane, metres")->capture_default_str();
   cmd->add_option("--far", args->far_m, "Far clip plane, metres")->capture_default_str();
   cmd->add_flag("--cull", args->cull, "Cull back faces (model must have consistent winding)");
-  cmd->add_flag("--no-normals", args->no_normals, "Skip the normal output");
+  cmd->add_flag("--no-normals", args->no_normals, "Skip the normal and back-face outputs");
   cmd->add_flag("--reference", args->reference, "Use the CPU reference rasterizer instead of Vulkan");
   cmd->callback([args] { run(*args); });
 }

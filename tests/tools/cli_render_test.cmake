@@ -4,7 +4,8 @@ execute_process(COMMAND ${VKLOC} render --model room --out ${WORK}/room RESULT_V
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "vkloc render failed (${rc}): ${out} ${err}")
 endif()
-foreach(f view000_rgba.png view000_gray.png view000_depth_mm.png view000_depth.tiff view000_normals.png)
+foreach(f view000_rgba.png view000_gray.png view000_depth_mm.png view000_depth.tiff view000_normals.png
+          view000_back_faces.png)
   if(NOT EXISTS ${WORK}/room/${f})
     message(FATAL_ERROR "vkloc render did not write ${f}: ${out}")
   endif()
@@ -42,7 +43,8 @@ if(NOT rc EQUAL 0 OR NOT out MATCHES "view 0: +[0-9.]+ ms" OR NOT EXISTS ${WORK}
 endif()
 execute_process(COMMAND ${VKLOC} render --model city --no-normals --cull --out ${WORK}/variants
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(NOT rc EQUAL 0 OR NOT err STREQUAL "" OR EXISTS ${WORK}/variants/view000_normals.png OR NOT EXISTS ${WORK}/variants/view000_rgba.png)
+if(NOT rc EQUAL 0 OR NOT err STREQUAL "" OR EXISTS ${WORK}/variants/view000_normals.png
+   OR EXISTS ${WORK}/variants/view000_back_faces.png OR NOT EXISTS ${WORK}/variants/view000_rgba.png)
   message(FATAL_ERROR "vkloc render --no-normals --cull failed (${rc}): ${out} ${err}")
 endif()
 # Errors: one line on stderr, non-zero exit, no crash.

@@ -20,7 +20,7 @@ namespace vkloc {
 enum RenderOutputFlags : uint32_t {
   kRenderColor = 1u << 0,    ///< RGBA8 and 8-bit gray.
   kRenderDepth = 1u << 1,    ///< Linear metric depth.
-  kRenderNormals = 1u << 2,  ///< Camera-frame face normals.
+  kRenderNormals = 1u << 2,  ///< Camera-frame face normals and the back-face mask.
   kRenderAll = kRenderColor | kRenderDepth | kRenderNormals,
 };
 
