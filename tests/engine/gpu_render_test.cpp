@@ -461,6 +461,7 @@ TEST_F(GpuRender, StagingAndDirectMemoryPathsAgree) {
   auto nb = (*b)->render(vga(), T, no_normals);
   ASSERT_TRUE(na.ok() && nb.ok());
   EXPECT_TRUE(na->normals.empty());
+  EXPECT_TRUE(na->back_faces.empty());
   EXPECT_EQ(na->depth.data, ra->depth.data);
   EXPECT_EQ(na->rgba.data, nb->rgba.data);
   EXPECT_EQ((*staging_context)->validationMessages(), 0u);

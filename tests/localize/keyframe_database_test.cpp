@@ -58,6 +58,38 @@ const std::shared_ptr<const KeyframeDatabase>& boxDatabase() {
   return db;
 }
 
+TEST(KeyframeDatabase, ViewsFromInsideClosedGeometryAreLeftOut) {
+  // A closed 2 m box (faces wound outwards) in a grid of positions inside and around it: every
+  // view from inside sees only back faces (the render's back-face mask) and is left out.
+  const Eigen::Vector3d lo(-1, -1, 0), hi(1, 1, 2);
+  const Model model = test::makeBox(lo, hi);
+  auto renderer = CpuRenderer::create(model);
+  ASSERT_TRUE(renderer.ok());
+  KeyframePlacement p;
+  p.volume.min = {-3.0f, -3.0f, 0.9f};
+  p.volume.max = {3.0f, 3.0f, 1.1f};
+  p.spacing_m = 0.5;
+  p.headings = 8;
+  p.tilts_deg = {0.0};
+  auto positions = placementPositions(p);
+  ASSERT_TRUE(positions.ok());
+  size_t clear_inside = 0;  // positions inside with every wall, the floor and the roof > 0.3 m away
+  for (const Eigen::Vector3d& x : *positions) {
+    clear_inside += (x - lo).minCoeff() > 0.3 && (hi - x).minCoeff() > 0.3;
+  }
+  ASSERT_GT(clear_inside, 0u);
+  KeyframeBuildStats stats;
+  std::vector<Renderer*> renderers{renderer->get()};
+  auto db = buildKeyframeDatabase(model, renderers, test::localizeCamera(), p, RenderSettings{}, {}, &stats);
+  ASSERT_TRUE(db.ok()) << db.error().message;
+  EXPECT_GE(stats.inside, clear_inside * 8);
+  EXPECT_GT(stats.kept, 0u);
+  for (const DatabaseKeyframe& k : db->keyframes()) {
+    const Eigen::Vector3d x = k.T_world_camera.translation();
+    EXPECT_FALSE((x - lo).minCoeff() > 0 && (hi - x).minCoeff() > 0) << x.transpose();
+  }
+}
+
 /// The asymmetric scene's database and its frames at localizeTruth(i), built once per process.
 const std::shared_ptr<const KeyframeDatabase>& asymmetricDatabase() {
   static std::shared_ptr<const KeyframeDatabase> db = [] {

@@ -129,6 +129,40 @@ TEST(KeyframeMaker, MakesEdgePointsAndLeavesOutDroppedKinds) {
   EXPECT_EQ(failed.error().code, ErrorCode::kGpuError);
 }
 
+TEST(KeyframeMaker, PointsNearABackFaceAreOfThatKindWhateverElseTheyAre) {
+  // The box without its top from above: points near the inside seen through the opening (back
+  // faces), near the sky around the box (background), and near both at the far rim.
+  const Eigen::Vector3d lo(-0.5, -0.375, 0.0), hi(0.625, 0.5, 1.25);
+  ReferenceEdgeOptions reference;
+  reference.levels = 1;
+  KeyframeMaker maker(std::move(CpuRenderer::create(test::makeBox(lo, hi, true))).value(), test::localizeCamera(),
+                      RenderSettings{}, reference);
+  KeyframeRequest request;
+  request.T_world_ref = test::cameraLookingAt({1.3, -1.5, 3.6}, {0.06, 0.06, 0.4});
+  auto counts = [&](const EdgeKindMask& drop) {
+    request.dropped_kinds = drop;
+    auto k = maker.make(request);
+    EXPECT_TRUE(k.ok());
+    std::array<int, 3> n{};  // near a back face, near background only, neither
+    for (const EdgePoint& p : (*k)->reference.points) {
+      ++n[(p.kind & kEdgeBackFace) ? 0 : (p.kind & kEdgeBackground) ? 1 : 2];
+    }
+    return n;
+  };
+  const std::array<int, 3> all = counts({});
+  EXPECT_GT(all[0], 20);
+  EXPECT_GT(all[1], 20);
+  EXPECT_GT(all[2], 5);
+  const std::array<int, 3> no_back_face = counts({false, false, false, true});
+  EXPECT_EQ(no_back_face[0], 0);
+  EXPECT_EQ(no_back_face[1], all[1]);
+  EXPECT_EQ(no_back_face[2], all[2]);
+  const std::array<int, 3> no_background = counts({false, false, true, false});
+  EXPECT_EQ(no_background[0], all[0]);  // those near both stay with the back faces
+  EXPECT_EQ(no_background[1], 0);
+  EXPECT_EQ(no_background[2], all[2]);
+}
+
 TEST(KeyframeMaker, WaitingCallsUseTheWaitingThreadsAndMakeTheSameKeyframe) {
   auto control = std::make_shared<GatedRenderer::Control>();
   auto maker = gatedMaker(control);

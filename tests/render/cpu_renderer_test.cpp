@@ -868,6 +868,7 @@ TEST(ReferenceRender, BandsOfRowsOnSeveralThreadsGiveTheOneThreadOutput) {
         EXPECT_EQ(out.rgba.data, expected.rgba.data) << name << ", " << threads << " threads";
         EXPECT_EQ(out.depth.data, expected.depth.data) << name << ", " << threads << " threads";
         EXPECT_EQ(out.normals.data, expected.normals.data) << name << ", " << threads << " threads";
+        EXPECT_EQ(out.back_faces.data, expected.back_faces.data) << name << ", " << threads << " threads";
         EXPECT_EQ(out.gray.data, expected.gray.data) << name << ", " << threads << " threads";
         EXPECT_EQ(out.blocks_drawn, expected.blocks_drawn);
         EXPECT_EQ(out.triangles_drawn, expected.triangles_drawn);
@@ -900,6 +901,7 @@ TEST(ReferenceRender, BandsOfRowsHandleShortImagesAndDepthOnlyRenders) {
         EXPECT_EQ(out.rgba.data, expected.rgba.data) << height << " rows, " << threads << " threads";
         EXPECT_EQ(out.depth.data, expected.depth.data) << height << " rows, " << threads << " threads";
         EXPECT_EQ(out.normals.data, expected.normals.data) << height << " rows, " << threads << " threads";
+        EXPECT_EQ(out.back_faces.data, expected.back_faces.data) << height << " rows, " << threads << " threads";
         EXPECT_EQ(out.triangles_drawn, expected.triangles_drawn);
       }
     }

@@ -273,6 +273,36 @@ TEST(EdgeTracker, ConvergesOnTexturedBoxScene) {
   }
 }
 
+TEST(EdgeTracker, PointsNearABackFaceAreCountedAsTheirOwnKind) {
+  // The box without its top from above, tracked at the keyframe's pose in its own render: the
+  // per-kind counts put points near a back face under index 4 only (the keyframes learn that
+  // kind apart from the others).
+  const Eigen::Vector3d lo(-0.5, -0.375, 0.0), hi(0.625, 0.5, 1.25);
+  const Model model = test::makeBox(lo, hi, true);
+  const PinholeCamera cam = vgaCamera();
+  const Pose T = test::cameraLookingAt({1.3, -1.5, 3.6}, {0.06, 0.06, 0.4});
+  const RenderOutput view = render(model, cam, T);
+  auto reference = buildEdgeReference(view, cam, T);
+  ASSERT_TRUE(reference.ok());
+  std::array<int, 5> expected{};
+  for (const EdgePoint& p : reference->points) {
+    const uint32_t base = p.kind & ~(kEdgeBackground | kEdgeBackFace);
+    ++expected[(p.kind & kEdgeBackFace)     ? 4
+               : (p.kind & kEdgeBackground) ? 3
+               : base == kEdgeOcclusion     ? 1
+               : base == kEdgeCrease        ? 2
+                                            : 0];
+  }
+  ASSERT_GT(expected[4], 50);
+  ASSERT_GT(expected[3], 50);
+  auto live = buildLiveFrame(view.gray, cam);
+  ASSERT_TRUE(live.ok());
+  auto r = trackFrame(*reference, *live, T);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->quality.kind_points_in_image, expected);
+  EXPECT_EQ(r->quality.points_in_image, expected[0] + expected[1] + expected[2] + expected[3] + expected[4]);
+}
+
 // A keyframe render shows texture a camera does not: faint shading of a model's textures (painted
 // walls, plaster, wood grain) that the camera's image, under its own light, tone curve and noise,
 // does not show. Here every face of the box scene is a plain texture with a dark border and cross

@@ -625,38 +625,52 @@ TEST(ReferenceEdges, PointsSeenThroughAHoleAreMarkedNearABackFace) {
   cam.cy = 119.5;
   const Pose T_world_ref = test::cameraLookingAt({1.3, -1.5, 3.6}, {0.06, 0.06, 0.4});
   ReferenceEdgeOptions options;
-  options.levels = 1;
-  auto points = [&](const Model& model, bool with_back_faces) {
+  options.levels = 2;  // level 1's mask is level 0's, halved with the depth
+  // Points of every level, level 0 first.
+  auto levels = [&](const Model& model, bool with_back_faces) {
     auto view = renderReference(model, cam, T_world_ref);
     EXPECT_TRUE(view.ok());
     if (!with_back_faces) view->back_faces = ImageU8{};
     auto ref = buildEdgeReference(*view, cam, T_world_ref, options);
     EXPECT_TRUE(ref.ok());
-    return ref.ok() ? ref->points : std::vector<EdgePoint>{};
+    std::vector<std::vector<EdgePoint>> out;
+    if (!ref.ok()) return out;
+    out.push_back(ref->points);
+    for (const std::vector<EdgePoint>& level : ref->coarse_points) out.push_back(level);
+    return out;
   };
   // Where the line of sight to a point crosses the plane of the opening (z = hi.z): inside the
-  // opening (by more than 1 cm) for the points seen through it, outside it (by more than 5 cm)
-  // for points on the outer walls well below the rim.
+  // opening (by more than 1 cm at level 0) for the points seen through it, outside it (by more
+  // than 5 cm) for points on the outer walls well below the rim; margins double per level.
   const Eigen::Vector3d eye = T_world_ref.translation();
-  int inside = 0, outside = 0;
-  for (const EdgePoint& p : points(test::makeBox(lo, hi, true), true)) {
-    const Eigen::Vector3d w = T_world_ref * Eigen::Vector3d(p.x, p.y, p.z);
-    const Eigen::Vector3d crossing = eye + (eye.z() - hi.z()) / (eye.z() - w.z()) * (w - eye);
-    const double margin = std::min({crossing.x() - lo.x(), hi.x() - crossing.x(), crossing.y() - lo.y(),
-                                    hi.y() - crossing.y()});  // > 0 inside the opening
-    if (w.z() < hi.z() - 0.03 && margin > 0.01) {
-      ++inside;
-      EXPECT_TRUE(p.kind & kEdgeBackFace) << w.transpose();
-    } else if (w.z() < hi.z() - 0.15 && margin < -0.05) {
-      ++outside;
-      EXPECT_EQ(p.kind & kEdgeBackFace, 0u) << w.transpose();
+  const std::vector<std::vector<EdgePoint>> open_box = levels(test::makeBox(lo, hi, true), true);
+  ASSERT_EQ(open_box.size(), 2u);
+  for (size_t k = 0; k < open_box.size(); ++k) {
+    const double scale = k == 0 ? 1.0 : 2.0;
+    int inside = 0, outside = 0;
+    for (const EdgePoint& p : open_box[k]) {
+      const Eigen::Vector3d w = T_world_ref * Eigen::Vector3d(p.x, p.y, p.z);
+      const Eigen::Vector3d crossing = eye + (eye.z() - hi.z()) / (eye.z() - w.z()) * (w - eye);
+      const double margin = std::min({crossing.x() - lo.x(), hi.x() - crossing.x(), crossing.y() - lo.y(),
+                                      hi.y() - crossing.y()});  // > 0 inside the opening
+      if (w.z() < hi.z() - 0.03 * scale && margin > 0.01 * scale) {
+        ++inside;
+        EXPECT_TRUE(p.kind & kEdgeBackFace) << "level " << k << ": " << w.transpose();
+      } else if (w.z() < hi.z() - 0.15 * scale && margin < -0.05 * scale) {
+        ++outside;
+        EXPECT_EQ(p.kind & kEdgeBackFace, 0u) << "level " << k << ": " << w.transpose();
+      }
     }
+    EXPECT_GT(inside, 20 / (1 + static_cast<int>(k))) << "level " << k;
+    EXPECT_GT(outside, 20 / (1 + static_cast<int>(k))) << "level " << k;
   }
-  EXPECT_GT(inside, 20);
-  EXPECT_GT(outside, 20);
   // The closed box shows no back face; a render without the mask marks none.
-  for (const EdgePoint& p : points(test::makeBox(lo, hi), true)) EXPECT_EQ(p.kind & kEdgeBackFace, 0u);
-  for (const EdgePoint& p : points(test::makeBox(lo, hi, true), false)) EXPECT_EQ(p.kind & kEdgeBackFace, 0u);
+  for (const auto& level : levels(test::makeBox(lo, hi), true)) {
+    for (const EdgePoint& p : level) EXPECT_EQ(p.kind & kEdgeBackFace, 0u);
+  }
+  for (const auto& level : levels(test::makeBox(lo, hi, true), false)) {
+    for (const EdgePoint& p : level) EXPECT_EQ(p.kind & kEdgeBackFace, 0u);
+  }
 }
 
 TEST(ReferenceEdges, HoleRimsAreDroppedAndSilhouettesKept) {

@@ -527,10 +527,9 @@ Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::ve
   // One thread per renderer already: a CPU renderer's bands would only nest threads.
   if (renderers.size() > 1) look.threads = 1;
   look.outputs = kRenderColor | kRenderDepth;
+  // The back-face mask comes with the normals (RenderOutput::back_faces).
+  if (placement.max_back_face_fraction < 1.0) look.outputs |= kRenderNormals;
   look.cull_back_faces = false;
-  RenderSettings culled = look;
-  culled.outputs = kRenderDepth;
-  culled.cull_back_faces = true;
 
   Result<std::vector<Eigen::Vector3d>> positions = placementPositions(placement);
   if (!positions.ok()) return positions.error();
@@ -578,14 +577,9 @@ Result<KeyframeDatabase> buildKeyframeDatabase(const Model& model, const std::ve
       }
       if (static_cast<double>(depths.size()) < placement.min_model_fraction * static_cast<double>(pixels)) continue;
       if (placement.max_back_face_fraction < 1.0) {
-        // Where the nearest surface is seen from behind, culling removes it: the depth changes.
-        Result<RenderOutput> front = renderer.render(small, poses[v], culled);
-        if (!front.ok()) return fail(front.error());
-        size_t back = 0;
-        for (size_t p = 0; p < pixels; ++p) {
-          const float a = out->depth.data[p], b = front->depth.data[p];
-          back += a > 0.0f && !(std::abs(a - b) <= 1e-3f * a);
-        }
+        // Pixels whose nearest surface is seen from behind.
+        const std::vector<uint8_t>& mask = out->back_faces.data;
+        const size_t back = mask.size() - static_cast<size_t>(std::count(mask.begin(), mask.end(), uint8_t{0}));
         if (static_cast<double>(back) > placement.max_back_face_fraction * static_cast<double>(pixels)) {
           view.verdict = Verdict::kInside;
           continue;
