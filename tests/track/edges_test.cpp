@@ -499,15 +499,13 @@ TEST(ReferenceEdges, GeometricFlagsFollowThePairRule) {
   }
 }
 
+/// 320x240, focal length 300 px, principal point at the centre.
+PinholeCamera qvga300() { return PinholeCamera{300.0, 300.0, 159.5, 119.5, 320, 240}; }
+
 TEST(ReferenceEdges, BoxSilhouetteAndCreasePointsLieOnTheBoxEdges) {
   const Eigen::Vector3d lo(-0.3, -0.2, 0.0), hi(0.3, 0.25, 0.4);
   const Model box = test::makeBox(lo, hi);
-  PinholeCamera cam;
-  cam.width = 320;
-  cam.height = 240;
-  cam.fx = cam.fy = 300;
-  cam.cx = 159.5;
-  cam.cy = 119.5;
+  const PinholeCamera cam = qvga300();
   const Pose T_world_ref = test::cameraLookingAt({0.8, -0.9, 0.8}, {0.0, 0.02, 0.18});
   auto view = renderReference(box, cam, T_world_ref);
   ASSERT_TRUE(view.ok()) << view.error().message;
@@ -617,12 +615,7 @@ TEST(ReferenceEdges, PointsSeenThroughAHoleAreMarkedNearABackFace) {
   // and of the floor (back faces) with their creases, and the opening's rim against them; the
   // outer walls are front faces. Untextured: geometric edges only.
   const Eigen::Vector3d lo(-0.5, -0.375, 0.0), hi(0.625, 0.5, 1.25);
-  PinholeCamera cam;
-  cam.width = 320;
-  cam.height = 240;
-  cam.fx = cam.fy = 300;
-  cam.cx = 159.5;
-  cam.cy = 119.5;
+  const PinholeCamera cam = qvga300();
   const Pose T_world_ref = test::cameraLookingAt({1.3, -1.5, 3.6}, {0.06, 0.06, 0.4});
   ReferenceEdgeOptions options;
   options.levels = 2;  // level 1's mask is level 0's, halved with the depth
@@ -685,12 +678,7 @@ TEST(ReferenceEdges, HoleRimsAreDroppedAndSilhouettesKept) {
   test::appendQuad(wall, {-a, -b, 0}, (a - b) * ex, (2 * b) * ey);  // left
   test::appendQuad(wall, {b, -b, 0}, (a - b) * ex, (2 * b) * ey);   // right
   test::finishSingleBlock(wall);
-  PinholeCamera cam;
-  cam.width = 320;
-  cam.height = 240;
-  cam.fx = cam.fy = 300;
-  cam.cx = 159.5;
-  cam.cy = 119.5;
+  const PinholeCamera cam = qvga300();
   const Pose T_world_ref = test::cameraLookingAt({0.0, 0.0, 1.5}, {0.0, 0.0, 0.0});
   auto view = renderReference(wall, cam, T_world_ref);
   ASSERT_TRUE(view.ok()) << view.error().message;
