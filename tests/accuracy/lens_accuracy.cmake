@@ -26,6 +26,10 @@
 #                 verified at 0.47) at an unknown velocity (the velocity it kept was the wrong
 #                 thing). Both views lose no frame and keep the median error within 0.5 % of the
 #                 scene depth (the crop was 21 m off at the median before, bridged 300 m off).
+#                 With -DVULKAN=ON the default view alone, its keyframes rendered and its edges
+#                 aligned through Vulkan (lavapipe where there is no GPU): lost none, median within
+#                 0.5 % of the depth (its filter took poses verified at 0.01 after refusing verified
+#                 ones and stayed 16 m off before such a stretch took verified poses alone).
 #   radtan_mild, radtan_euroc   the room (easy, 300 frames) and the same images through a
 #                 radial-tangential lens (vkloc distort; mild: k1 -0.1 k2 0.01; euroc: EuRoC's
 #                 k1 -0.28 k2 0.074), tracked through the undistorted view: no frame lost and
@@ -39,8 +43,13 @@ set(failures "")
 function(track_case label seq)
   set(dir ${WORK}/${label})
   file(REMOVE_RECURSE ${dir})
+  if(VULKAN)
+    set(backend "")
+  else()
+    set(backend --no-vulkan)
+  endif()
   run("track ${label}" ${VKLOC} track --sequence ${seq} --out ${dir}/t.txt --report ${dir}/report --keyframes sync
-      --filter ekf --quiet --no-vulkan ${ARGN})
+      --filter ekf --quiet ${backend} ${ARGN})
   foreach(key frames lost inertial translation_median_m translation_max_m rotation_median_deg hz_median
               scene_depth_median_m)
     json_number(${key} ${dir}/report/track.json ${key})
@@ -100,17 +109,22 @@ elseif(CASE MATCHES "^fisheye_(city_edge|acro)$")
   set(view --view-size 480x360 --view-hfov 90 --view-pitch 45)
   set(labels eis crop)
   track_case(eis ${seq} --view stabilised ${view})
-  if(CASE STREQUAL "fisheye_acro")
+  if(VULKAN)
+    # The default view alone, rendered and aligned through Vulkan.
+    set(labels eis)
+  elseif(CASE STREQUAL "fisheye_acro")
     track_case(full ${seq} --view stabilised --view-dead-band 0 ${view})
     list(APPEND labels full)
   endif()
-  track_case(crop ${seq} --view undistorted ${view})
+  if(NOT VULKAN)
+    track_case(crop ${seq} --view undistorted ${view})
+  endif()
   foreach(label ${labels})
     check(${label} "${${label}_lost} == 0" "lost ${${label}_lost} frames")
     check(${label} "${${label}_translation_median_m} <= 0.005 * ${${label}_scene_depth_median_m}"
           "median ${${label}_translation_median_m} m > 0.5 % of the depth")
   endforeach()
-  if(CASE STREQUAL "fisheye_acro" AND RELATIVE)
+  if(CASE STREQUAL "fisheye_acro" AND RELATIVE AND NOT VULKAN)
     # Here the default view turns beyond its band (67 of the 100 frames): the issue's comparison
     # on a view that is not the crop (label open: on this drone which view wins changes with the
     # seed and with a rounding of the remap, 2026-12-07: band 6.1 vs crop 6.7 cm with OpenCV's
