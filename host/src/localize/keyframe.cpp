@@ -67,9 +67,8 @@ Result<std::shared_ptr<const Keyframe>> KeyframeMaker::make(const KeyframeReques
   const EdgeKindMask& drop = request.dropped_kinds;
   if (drop[0] || drop[1] || drop[2] || drop[3]) {
     auto dropped = [&](uint32_t kind) {
-      if (kind & kEdgeBackFace) return drop[3];
-      if (kind & kEdgeBackground) return drop[2];
-      return (drop[0] && kind == kEdgeOcclusion) || (drop[1] && kind == kEdgeCrease);
+      const int k = edgeKindIndex(kind);  // texture (0) is always kept
+      return k >= 1 && drop[static_cast<size_t>(k - 1)];
     };
     auto keep = [&](std::vector<EdgePoint>& points) {
       points.erase(std::remove_if(points.begin(), points.end(), [&](const EdgePoint& p) { return dropped(p.kind); }),

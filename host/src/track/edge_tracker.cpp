@@ -635,13 +635,8 @@ Result<TrackResult> trackFrame(const EdgeReference& reference, EdgeAlignmentBack
   int inliers = 0;
   double inlier_sum = 0;
   std::array<int, 5> kind_inliers{};
-  auto kindIndex = [](uint32_t kind) {
-    if (kind & kEdgeBackFace) return 4;
-    if (kind & kEdgeBackground) return 3;
-    return kind == kEdgeOcclusion ? 1 : kind == kEdgeCrease ? 2 : kind == kEdgeTexture ? 0 : -1;
-  };
   for (size_t i = 0; i < points.size(); ++i) {
-    const int kind = kindIndex(points[i].kind);
+    const int kind = edgeKindIndex(points[i].kind);
     if (projectsInImage(points[i], T, finest)) {
       ++q.points_in_image;
       if (kind >= 0) ++q.kind_points_in_image[static_cast<size_t>(kind)];

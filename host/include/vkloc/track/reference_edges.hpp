@@ -47,6 +47,15 @@ enum EdgeKind : uint32_t {
   kEdgeBackFace = 1u << 4,
 };
 
+/// The kind an EdgePoint::kind counts as (TrackQuality::kind_inlier_ratio's index): 0 texture,
+/// 1 occlusion, 2 crease, 3 near background, 4 near a back face (either modifier decides whatever
+/// the base kind; back face first); -1 for no known kind.
+inline int edgeKindIndex(uint32_t kind) {
+  if (kind & kEdgeBackFace) return 4;
+  if (kind & kEdgeBackground) return 3;
+  return kind == kEdgeOcclusion ? 1 : kind == kEdgeCrease ? 2 : kind == kEdgeTexture ? 0 : -1;
+}
+
 /// A 3D edge point in the reference camera frame; 16 bytes, the std430 layout of a vec4.
 struct EdgePoint {
   float x = 0;        ///< Reference camera frame, metres (x right).
