@@ -1839,6 +1839,23 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
     if (!retry.ok()) return retry.error();
     track = std::move(retry).value();
   }
+  // A pose the filter's gate refuses that was aligned against a keyframe the synchronous mode
+  // would have replaced for this frame (worker mode: the worker lags behind a fast camera) is
+  // aligned once more against a keyframe made at the guess, waiting for it. Without it a stale
+  // keyframe's pose refused at the start (the geometry-only room: the second frame aligned 5.5 cm
+  // off against the first's keyframe, 8 % of the depth behind) left the filter to bridge the
+  // plain whiteboard that follows on a velocity from one frame, and the run ended 3.4 m off.
+  if (m.options.retry_refused_with_fresh_reference && m.worker() && !out.reference_rendered &&
+      track.state == TrackingState::kTracking && prediction && prediction->inertial &&
+      m.keyframes->needsKeyframe(guess) &&
+      !m.motion->consistent(*prediction, Impl::filterPose(track), track.covariance,
+                            m.keyframes->current()->scene_depth_m)) {
+    VKLOC_TRY_STATUS(m.makeKeyframe(guess, t_ns, out));
+    Result<TrackResult> retry = alignFrom(guess);
+    if (!retry.ok()) return retry.error();
+    track = std::move(retry).value();
+    out.keyframe_retried = true;
+  }
   // 3b. Motion search: lost while the prior's uncertainty exceeds the deepest basin.
   // A pose the filter's gate refuses is as good as lost here.
   // On the first frame after a start at an unknown velocity the filter's gate admits whatever

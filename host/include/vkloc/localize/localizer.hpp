@@ -252,6 +252,10 @@ struct LocalizerOptions {
   /// When a frame is lost against an older keyframe (kWhenNeeded), render a fresh one at the
   /// guess and align once more before reporting the frame lost.
   bool retry_lost_with_fresh_reference = true;
+  /// Worker mode, with the IMU: a pose the filter's gate refuses, aligned against a keyframe the
+  /// synchronous mode would have replaced for this frame (KeyframeManager::needsKeyframe at the
+  /// guess), is aligned once more against a keyframe made at the guess (waiting for it).
+  bool retry_refused_with_fresh_reference = true;
   /// Initializer (until the first frame is tracked after create/reset): refinements from fresh
   /// keyframes, and the start-up search over rotations (see InitializerOptions).
   int init_refinements = 4;
@@ -458,6 +462,9 @@ struct LocalizationResult {
   /// Frames between the frame the keyframe's pose was made for and this one (negative: it was
   /// made for a frame still to come).
   int64_t keyframe_age_frames = 0;
+  /// Worker mode: the pose found against a lagging keyframe was refused, and the frame was
+  /// aligned again against one made at the guess (LocalizerOptions::retry_refused_with_fresh_reference).
+  bool keyframe_retried = false;
   int reference_points = 0;      ///< Edge points of the finest keyframe level.
   int search_level = 0;          ///< Deepest pyramid level the prior's uncertainty made the alignment start at.
   int motion_search_probes = 0;  ///< Start translations probed by the motion search (0: none ran).
