@@ -96,10 +96,9 @@ function(track_starts sequence frames starts)
   set(start_failures "${start_failures}" PARENT_SCOPE)
 endfunction()
 
-# Tracks all of `sequence` from its first ground-truth pose (synchronous keyframes, EKF) and sets,
-# in the caller, its report's frames, lost, inertial, scene_depth_median_m, translation_median_m
-# and translation_max_m.
-# track_whole(sequence [keyframes]): keyframes sync (the default here) or worker.
+# track_whole(sequence [keyframes]): tracks all of `sequence` from its first ground-truth pose
+# (EKF; keyframes `sync` unless `worker` is given) and sets, in the caller, its report's frames,
+# lost, inertial, scene_depth_median_m, translation_median_m and translation_max_m.
 function(track_whole sequence)
   set(keyframes sync)
   if(ARGC GREATER 1)
