@@ -1833,11 +1833,16 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
   Result<TrackResult> aligned = alignFrom(guess);
   if (!aligned.ok()) return aligned.error();
   TrackResult track = std::move(aligned).value();
-  if (track.state == TrackingState::kLost && !out.reference_rendered && m.options.retry_lost_with_fresh_reference) {
+  // The frame aligned once more against a keyframe made at the guess (waiting for it).
+  auto realignAgainstFreshKeyframe = [&]() -> Status {
     VKLOC_TRY_STATUS(m.makeKeyframe(guess, t_ns, out));
     Result<TrackResult> retry = alignFrom(guess);
     if (!retry.ok()) return retry.error();
     track = std::move(retry).value();
+    return Status::success();
+  };
+  if (track.state == TrackingState::kLost && !out.reference_rendered && m.options.retry_lost_with_fresh_reference) {
+    VKLOC_TRY_STATUS(realignAgainstFreshKeyframe());
   }
   // A pose the filter's gate refuses that was aligned against a keyframe the synchronous mode
   // would have replaced for this frame (worker mode: the worker lags behind a fast camera) is
@@ -1850,10 +1855,7 @@ Result<LocalizationResult> Localizer::localizeView(int64_t t_ns, const ImageU8& 
       m.keyframes->needsKeyframe(guess) &&
       !m.motion->consistent(*prediction, Impl::filterPose(track), track.covariance,
                             m.keyframes->current()->scene_depth_m)) {
-    VKLOC_TRY_STATUS(m.makeKeyframe(guess, t_ns, out));
-    Result<TrackResult> retry = alignFrom(guess);
-    if (!retry.ok()) return retry.error();
-    track = std::move(retry).value();
+    VKLOC_TRY_STATUS(realignAgainstFreshKeyframe());
     out.keyframe_retried = true;
   }
   // 3b. Motion search: lost while the prior's uncertainty exceeds the deepest basin.
